@@ -1,0 +1,396 @@
+"""Time-varying mesh stiffness over a revolution, by slices of the face width, with pits.
+
+Method (PHYSICS.md sections 2-3):
+
+- The face width in contact is cut into ``n_slices`` slices; each is a thin
+  spur pair whose contact point on the transverse line of action is shifted by
+  ``w tan(beta_b)`` at face position ``w`` (slice method; Wan et al. 2014).
+  Slices act in parallel, tooth pairs in contact act in parallel.
+- The healthy compliance of a tooth pair per unit face width is tabulated ONCE
+  as a function of the contact position ``g`` on the line of action (measured
+  from T1, the pinion base tangent point): Hertz + bending + shear + axial +
+  fillet foundation of both teeth (:mod:`datagen.compliance`). A revolution is
+  assembled by indexing that table; only the pitted engagements need more work.
+- Mesh position ``x`` counts mesh cycles (pinion angle = 2 pi x / z1). Engagement
+  ``m`` (pinion tooth ``m % z1``, wheel tooth ``m % z2``) enters contact at
+  ``x = m``; its slice at ``w`` is at ``g = A + (x - m) p_bt - w tan(beta_b)``
+  and in contact while ``A <= g <= E``.
+- Pits (``pit_model="no_contact"``, default): a pitted pixel on the contact line
+  carries no load (a 0.1-0.2 mm deep pit does not close under load), so that
+  slice of that pair drops out while it is there; in addition the material the
+  pits remove lowers the section (area, second moment) of that slice for every
+  load point above them (Ma et al. 2015; Chen & Shao 2011).
+  ``pit_model="weak_spring"`` follows the spur paper literally: a pitted pixel
+  stays a spring whose compliance omits the Hertzian term (its "weak spring"),
+  with the same section loss.
+- The fillet-foundation term of each tooth is taken independently per pair
+  (no Chen & Shao multi-pair correction); no coupling between slices.
+
+References
+----------
+Wan, Z., Cao, H., Zi, Y., He, W., He, Z. (2014). An improved time-varying mesh stiffness algorithm and
+    dynamic modeling of gear-rotor system with tooth root crack. Eng. Fail. Anal. 42, 157-177.
+Ma, H., Li, Z., Feng, M., Feng, R., Wen, B. (2015). Time-varying mesh stiffness calculation of spur gear
+    pairs considering tooth spalling. Eng. Fail. Anal. 66, 166-176.
+Chen, Z., Shao, Y. (2011). Dynamic simulation of spur gear with tooth root crack propagating along tooth
+    width and crack depth. Eng. Fail. Anal. 18, 2149-2164.
+The spur paper: ../shared/seeds/000_3879ffd8da6fd0be.txt (pixel / weak-spring model).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from datagen.compliance import ToothBeam, beam_compliance, hertz_compliance, tooth_beam, tooth_compliance
+from datagen.flank import PitMap
+from gearpit.errors import InputError, require
+
+PIT_MODELS = ("no_contact", "weak_spring")
+
+#: points of the healthy compliance table along the line of action
+_TABLE_POINTS = 4097
+#: a pit may remove at most this fraction of the section thickness (keeps 1/I finite)
+_MAX_THICKNESS_LOSS = 0.9
+
+
+@dataclass(frozen=True, eq=False)
+class PairCompliance:
+    """Healthy tooth-pair compliance per unit face width as a function of ``g`` (m/N * m)."""
+
+    pair: object
+    beams: dict
+    g_table_m: np.ndarray
+    c_table: np.ndarray
+    c_hertz: float
+
+    def __call__(self, g_m):
+        return np.interp(g_m, self.g_table_m, self.c_table)
+
+
+def pair_compliance(pair) -> PairCompliance:
+    """Tabulate the healthy pair compliance per unit width over the path of contact."""
+    E, nu = pair.material.youngs_modulus_pa, pair.material.poisson
+    G = pair.material.shear_modulus_pa
+    beams = {w: tooth_beam(pair, w) for w in ("pinion", "wheel")}
+    g = np.linspace(pair.contact_start_m, pair.contact_end_m, _TABLE_POINTS)
+    c_h = hertz_compliance(E, nu)
+    c = np.full_like(g, c_h)
+    for w, beam in beams.items():
+        c += sum(tooth_compliance(beam, pair.roll_angle_rad(w, g), E, G).values())
+    return PairCompliance(pair=pair, beams=beams, g_table_m=g, c_table=c, c_hertz=c_h)
+
+
+@dataclass(frozen=True, eq=False)
+class MeshStiffness:
+    """Mesh stiffness over ``period_cycles`` mesh cycles (see module docstring).
+
+    Attributes
+    ----------
+    pair : GearPair
+    period_cycles : int
+        Length of the periodic record in mesh cycles (z1 = one pinion revolution).
+    x_cycles : ndarray (n_pos,)
+        Uniform mesh-position grid in [0, period_cycles); pinion angle = 2 pi x / z1.
+    k_n_per_m : ndarray (n_pos,)
+        Total mesh stiffness along the transverse line of action (N/m).
+    k_slots_n_per_m : ndarray (n_pos, n_slots)
+        Stiffness of each tooth pair in contact; slot ``s`` holds engagement ``floor(x) - s``.
+    engagement : ndarray (n_pos, n_slots) of int
+        Engagement index ``m`` (pinion tooth ``m % z1``, wheel tooth ``m % z2``), -1 if no contact.
+    """
+
+    pair: object
+    period_cycles: int
+    positions_per_cycle: int
+    n_slices: int
+    pit_model: str
+    pits: tuple
+    x_cycles: np.ndarray
+    k_n_per_m: np.ndarray
+    k_slots_n_per_m: np.ndarray
+    engagement: np.ndarray
+    _g_cycle: np.ndarray = field(repr=False)        # (ppc, n_slots, n_slices) contact position, NaN if none
+    _k_cycle: np.ndarray = field(repr=False)        # (ppc, n_slots, n_slices) healthy slice stiffness
+    _overrides: dict = field(repr=False)            # (m, slot) -> (ppc, n_slices) slice stiffness of pitted pairs
+
+    @property
+    def n_slots(self) -> int:
+        return self.k_slots_n_per_m.shape[1]
+
+    @property
+    def angle_rad(self) -> np.ndarray:
+        """Pinion angle of each position (rad)."""
+        return 2 * np.pi * self.x_cycles / self.pair.pinion.teeth
+
+    @cached_property
+    def mean_n_per_m(self) -> float:
+        return float(self.k_n_per_m.mean())
+
+    def at(self, x_cycles) -> np.ndarray:
+        """Total stiffness at mesh positions (periodic linear interpolation)."""
+        x = np.mod(np.asarray(x_cycles, dtype=float), self.period_cycles) * self.positions_per_cycle
+        i0 = np.floor(x).astype(np.int64)
+        f = x - i0
+        n = self.k_n_per_m.size
+        i0 %= n
+        return self.k_n_per_m[i0] * (1 - f) + self.k_n_per_m[(i0 + 1) % n] * f
+
+    def contact_positions(self, i_pos: int) -> np.ndarray:
+        """Contact position g (m from T1) of every slice of every slot at one position; NaN out of contact."""
+        return self._g_cycle[i_pos % self.positions_per_cycle]
+
+    def slice_stiffness(self, i_pos: int) -> np.ndarray:
+        """(n_slots, n_slices) stiffness of every slice of every pair in contact at one position (N/m)."""
+        c, u = divmod(int(i_pos), self.positions_per_cycle)
+        k = self._k_cycle[u].copy()
+        for s in range(self.n_slots):
+            m = (c - s) % self.period_cycles
+            if (m, s) in self._overrides:
+                k[s] = self._overrides[(m, s)][u]
+        return k
+
+    def weighted(self, f) -> np.ndarray:
+        """(n_pos, n_slots): sum over slices of k_slice * f(g_m, pinion_tooth, wheel_tooth).
+
+        ``f`` is vectorised over arrays of equal shape. With ``f`` a tooth-pair
+        deviation along the line of action (m) this is the pair's error force
+        at zero deflection (N/m * m = N).
+        """
+        P, ppc = self.period_cycles, self.positions_per_cycle
+        z1, z2 = self.pair.pinion.teeth, self.pair.wheel.teeth
+        out = np.zeros(self.k_slots_n_per_m.shape)
+        g = np.nan_to_num(self._g_cycle, nan=self.pair.contact_start_m)
+        for c in range(P):
+            for s in range(self.n_slots):
+                m = (c - s) % P
+                k = self._overrides.get((m, s), self._k_cycle[:, s, :])
+                vals = f(g[:, s, :], np.full(g.shape[::2], m % z1), np.full(g.shape[::2], m % z2))
+                out[c * ppc:(c + 1) * ppc, s] = np.sum(k * vals, axis=1)
+        return out
+
+    def summary(self) -> dict:
+        """The numbers ``gearpit stiffness --json`` prints."""
+        k = self.k_n_per_m
+        b_mm = self.pair.contact_face_width_m * 1e3
+        return {
+            "pair": self.pair.name,
+            "period_cycles": self.period_cycles,
+            "positions": int(k.size),
+            "n_slices": self.n_slices,
+            "pit_model": self.pit_model,
+            "pitted_teeth": {pm.gear: pm.pitted_teeth for pm in self.pits},
+            "mean_n_per_m": float(k.mean()),
+            "min_n_per_m": float(k.min()),
+            "max_n_per_m": float(k.max()),
+            "ripple_peak_to_peak_over_mean": float((k.max() - k.min()) / k.mean()),
+            "mean_n_per_mm_um": float(k.mean() / b_mm / 1e6),
+            "contact_ratio_transverse": self.pair.contact_ratio_transverse,
+            "contact_ratio_overlap": self.pair.contact_ratio_overlap,
+        }
+
+
+def _normalise_pits(pair, pits) -> tuple[PitMap, ...]:
+    if pits is None:
+        return ()
+    maps = (pits,) if isinstance(pits, PitMap) else tuple(pits)
+    seen = set()
+    for pm in maps:
+        require(isinstance(pm, PitMap), "pits", type(pm).__name__, "a PitMap or a sequence of PitMaps")
+        require(pm.gear not in seen, "pits.gear", pm.gear, "at most one pit map per gear")
+        seen.add(pm.gear)
+        expected = pair.flank_grid(pm.gear, pm.grid.n_profile, pm.grid.n_face)
+        for name in ("profile_length_m", "face_width_m"):
+            got, want = getattr(pm.grid, name), getattr(expected, name)
+            if not math.isclose(got, want, rel_tol=1e-6):
+                raise InputError(f"pits.grid.{name}", got, f"{want:.6g} (the {pm.gear} flank of pair {pair.name})")
+        z = pair._gear(pm.gear).teeth
+        for t in pm.depth_m:
+            require(t < z, "pits.tooth", t, f"a tooth index in [0, {z - 1}] of the {pm.gear}")
+    return maps
+
+
+def mesh_stiffness(pair, *, pits=None, positions_per_cycle: int = 64, n_slices: int | None = None,
+                   pit_model: str = "no_contact") -> MeshStiffness:
+    """Mesh stiffness of ``pair`` over one revolution of the pitted gear(s).
+
+    Parameters
+    ----------
+    pair : GearPair
+    pits : PitMap or sequence of PitMap, optional
+        Pit depths on the pinion and/or the wheel. The record covers one pinion
+        revolution (z1 cycles) for pinion pits or none, one wheel revolution for
+        wheel pits, the hunting period lcm(z1, z2) for both.
+    positions_per_cycle : int
+        Mesh positions per mesh cycle.
+    n_slices : int, optional
+        Slices across the contact face width. Default: the pit maps' face
+        columns, else 1 for spur and 100 for helical gears.
+    pit_model : {"no_contact", "weak_spring"}
+
+    Returns
+    -------
+    MeshStiffness
+
+    Examples
+    --------
+    >>> from datagen.geometry import spur_pair_example
+    >>> ms = mesh_stiffness(spur_pair_example())
+    >>> 12 < ms.summary()["mean_n_per_mm_um"] < 25
+    True
+    """
+    require(pit_model in PIT_MODELS, "pit_model", pit_model, f"one of: {', '.join(PIT_MODELS)}")
+    require(isinstance(positions_per_cycle, int) and 4 <= positions_per_cycle <= 100000, "positions_per_cycle",
+            positions_per_cycle, "an integer in [4, 100000]")
+    maps = _normalise_pits(pair, pits)
+    if n_slices is None:
+        cols = [pm.grid.n_face for pm in maps if pm.pitted_teeth]
+        n_slices = max(cols) if cols else (100 if pair.is_helical else 1)
+    require(isinstance(n_slices, int) and 1 <= n_slices <= 20000, "n_slices", n_slices, "an integer in [1, 20000]")
+    z1, z2 = pair.pinion.teeth, pair.wheel.teeth
+    gears = {pm.gear for pm in maps if pm.pitted_teeth}
+    P = {frozenset(): z1, frozenset({"pinion"}): z1, frozenset({"wheel"}): z2}.get(frozenset(gears), math.lcm(z1, z2))
+    pc = pair_compliance(pair)
+    A, E_end, pb = pair.contact_start_m, pair.contact_end_m, pair.base_pitch_m
+    b_c = pair.contact_face_width_m
+    dw = b_c / n_slices
+    w = (np.arange(n_slices) + 0.5) * dw
+    shift = w * math.tan(pair.base_helix_angle_rad)
+    n_slots = int(math.floor(pair.contact_ratio_total)) + 2
+    u = np.arange(positions_per_cycle) / positions_per_cycle
+    g = A + (u[:, None, None] + np.arange(n_slots)[None, :, None]) * pb - shift[None, None, :]
+    eps = 1e-12 * pb
+    in_contact = (g >= A - eps) & (g <= E_end + eps)
+    g = np.where(in_contact, g, np.nan)
+    k_cycle = np.where(in_contact, dw / pc(np.nan_to_num(g, nan=A)), 0.0)
+    overrides = _pit_overrides(pair, pc, maps, P, g, dw, w, pit_model)
+    k_slots = np.tile(k_cycle.sum(axis=2), (P, 1))
+    n_pos = P * positions_per_cycle
+    cyc = np.arange(n_pos) // positions_per_cycle
+    engagement = (cyc[:, None] - np.arange(n_slots)[None, :]) % P
+    for (m, s), k in overrides.items():
+        c = (m + s) % P
+        k_slots[c * positions_per_cycle:(c + 1) * positions_per_cycle, s] = k.sum(axis=1)
+    engagement = np.where(np.tile(in_contact.any(axis=2), (P, 1)), engagement, -1)
+    return MeshStiffness(pair=pair, period_cycles=P, positions_per_cycle=positions_per_cycle, n_slices=n_slices,
+                         pit_model=pit_model, pits=maps, x_cycles=np.arange(n_pos) / positions_per_cycle,
+                         k_n_per_m=k_slots.sum(axis=1), k_slots_n_per_m=k_slots, engagement=engagement,
+                         _g_cycle=g, _k_cycle=k_cycle, _overrides=overrides)
+
+
+@dataclass(frozen=True, eq=False)
+class _PitGeometry:
+    """Per pitted tooth: cumulative section loss (rows+1, cols) and the pixel mask."""
+
+    depth: np.ndarray
+    dW: np.ndarray   # (3, rows+1, cols)
+    dA0: np.ndarray  # (rows+1, cols)
+
+
+def _section_loss(pair, beam: ToothBeam, which: str, depth: np.ndarray, grid) -> _PitGeometry:
+    """Cumulative W_n, A_0 increments that the pits of one tooth cause, row by row from the SAP up."""
+    rb = beam.base_radius_m
+    t_sap, _ = pair.active_roll_range_rad(which)
+    s_edges = np.arange(grid.n_profile + 1) * grid.ds_m
+    t_edges = np.sqrt(t_sap**2 + 2.0 * s_edges / rb)
+    a = beam.alpha2_rad - t_edges
+    y_edges = rb * (np.cos(a) - t_edges * np.sin(a)) - beam.y_root_m
+    t_mid = 0.5 * (t_edges[1:] + t_edges[:-1])
+    a_mid = beam.alpha2_rad - t_mid
+    z_mid = rb * (np.cos(a_mid) - t_mid * np.sin(a_mid)) - beam.y_root_m
+    thick = 2.0 * rb * (t_mid * np.cos(a_mid) + np.sin(a_mid))
+    dy = np.diff(y_edges)
+    loss = np.minimum(depth, _MAX_THICKNESS_LOSS * thick[:, None])
+    t_pit = thick[:, None] - loss
+    d_inv_i = 12.0 / t_pit**3 - 12.0 / thick[:, None] ** 3
+    d_inv_a = 1.0 / t_pit - 1.0 / thick[:, None]
+    dW = np.zeros((3, grid.n_profile + 1, grid.n_face))
+    for n in range(3):
+        dW[n, 1:] = np.cumsum(d_inv_i * (z_mid**n * dy)[:, None], axis=0)
+    dA0 = np.zeros((grid.n_profile + 1, grid.n_face))
+    dA0[1:] = np.cumsum(d_inv_a * dy[:, None], axis=0)
+    return _PitGeometry(depth=depth, dW=dW, dA0=dA0)
+
+
+def _pit_overrides(pair, pc: PairCompliance, maps, P: int, g_cycle, dw: float, w_slices, pit_model: str) -> dict:
+    """Slice stiffness of every pitted engagement, keyed by (engagement m, slot)."""
+    if not any(pm.pitted_teeth for pm in maps):
+        return {}
+    E, G = pair.material.youngs_modulus_pa, pair.material.shear_modulus_pa
+    b_c = pair.contact_face_width_m
+    per_gear = {}
+    for pm in maps:
+        if not pm.pitted_teeth:
+            continue
+        beam = pc.beams[pm.gear]
+        offset = (pair._gear(pm.gear).face_width_m - b_c) / 2.0
+        cols = np.clip(((w_slices + offset) / pm.grid.dw_m).astype(np.int64), 0, pm.grid.n_face - 1)
+        geo = {t: _section_loss(pair, beam, pm.gear, pm.depth_m[t], pm.grid) for t in pm.pitted_teeth}
+        per_gear[pm.gear] = (pm, beam, cols, geo)
+    z = {"pinion": pair.pinion.teeth, "wheel": pair.wheel.teeth}
+    engaged = sorted({m for gear, (pm, *_rest) in per_gear.items() for m in range(P) if m % z[gear] in pm.pitted_teeth})
+    n_slots = g_cycle.shape[1]
+    out = {}
+    for m in engaged:
+        for s in range(n_slots):
+            g = g_cycle[:, s, :]
+            contact = ~np.isnan(g)
+            if not contact.any():
+                continue
+            g0 = np.where(contact, g, pair.contact_start_m)
+            comp = pc(g0)
+            pitted_here = np.zeros(g.shape, bool)
+            for gear, (pm, beam, cols, geo) in per_gear.items():
+                tooth = m % z[gear]
+                if tooth not in geo:
+                    continue
+                pg = geo[tooth]
+                t_sap, _ = pair.active_roll_range_rad(gear)
+                roll = pair.roll_angle_rad(gear, g0)
+                s_arc = beam.base_radius_m * (roll**2 - t_sap**2) / 2.0
+                rows = np.clip((s_arc / pm.grid.ds_m).astype(np.int64), 0, pm.grid.n_profile - 1)
+                colg = np.broadcast_to(cols[None, :], rows.shape)
+                pitted_here |= pg.depth[rows, colg] > 0
+                a1, Y, h = beam.load_point(roll)
+                W = pg.dW[:, rows, colg]
+                b, sh, ax = beam_compliance(a1, Y, h, W, pg.dA0[rows, colg], E, G)
+                comp = comp + b + sh + ax
+            if pit_model == "no_contact":
+                k = np.where(contact & ~pitted_here, dw / comp, 0.0)
+            else:
+                comp = np.where(pitted_here, comp - pc.c_hertz, comp)
+                k = np.where(contact, dw / comp, 0.0)
+            out[(m, s)] = k
+    return out
+
+
+def pixel_stiffness_map(pair, pit_map: PitMap, tooth: int, *, pit_model: str = "no_contact") -> np.ndarray:
+    """Stiffness of each flank pixel while it is on the contact line (N/m per pixel column).
+
+    The spur paper's "stiffness distribution" picture (its Figs 11-12): row
+    ``i`` at its contact position, column ``j`` as a slice of the pixel's width.
+    """
+    require(pit_model in PIT_MODELS, "pit_model", pit_model, f"one of: {', '.join(PIT_MODELS)}")
+    grid = pit_map.grid
+    pc = pair_compliance(pair)
+    beam = pc.beams[pit_map.gear]
+    t_sap, _ = pair.active_roll_range_rad(pit_map.gear)
+    roll = np.sqrt(t_sap**2 + 2.0 * grid.s_centres_m / beam.base_radius_m)
+    if pit_map.gear == "pinion":
+        g = roll * beam.base_radius_m
+    else:
+        g = pair.line_of_action_length_m - roll * beam.base_radius_m
+    comp = np.repeat(pc(g)[:, None], grid.n_face, axis=1)
+    depth = pit_map.depth_m.get(tooth, np.zeros(grid.shape))
+    pg = _section_loss(pair, beam, pit_map.gear, depth, grid)
+    a1, Y, h = beam.load_point(roll)
+    rows = np.arange(grid.n_profile)
+    b, sh, ax = beam_compliance(a1[:, None], Y[:, None], h[:, None], pg.dW[:, rows, :], pg.dA0[rows, :],
+                                pair.material.youngs_modulus_pa, pair.material.shear_modulus_pa)
+    comp = comp + b + sh + ax
+    pitted = depth > 0
+    if pit_model == "no_contact":
+        return np.where(pitted, 0.0, grid.dw_m / comp)
+    return grid.dw_m / np.where(pitted, comp - pc.c_hertz, comp)

@@ -1,0 +1,1 @@
+"""Subcommands of the ``gearpit`` CLI, one module each."""

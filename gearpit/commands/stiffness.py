@@ -1,0 +1,105 @@
+"""``gearpit stiffness``: mesh stiffness of a preset or TOML pair, healthy or pitted -> CSV, PNG, JSON."""
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+
+from datagen.geometry import PRESETS, load_pair, preset
+from datagen.stiffness import PIT_MODELS, mesh_stiffness
+from gearpit.atomic import atomic_path
+from gearpit.errors import InputError, require
+from gearpit.tomlio import check_keys, read_toml
+
+
+def register(sub) -> None:
+    p = sub.add_parser("stiffness", help="time-varying mesh stiffness over a revolution (CSV, PNG, JSON)",
+                       description=__doc__)
+    src = p.add_mutually_exclusive_group()
+    src.add_argument("--preset", default="spur-gds", help=f"preset pair: {', '.join(sorted(PRESETS))}")
+    src.add_argument("--pair", type=Path, help="gear pair TOML ([pair] table, units in key names)")
+    p.add_argument("--pits", type=Path, help="TOML with a [pits] table (shape, teeth, severity, depth_mm, seed)")
+    p.add_argument("--mask", type=Path, help="pit mask PNG of one tooth (painted: white = pit, or 16-bit depth in um)")
+    p.add_argument("--photo", type=Path, help="photo of a flank; the pit mask is extracted from it")
+    p.add_argument("--tooth", type=int, default=0, help="tooth that --mask/--photo applies to (default 0)")
+    p.add_argument("--depth-mm", type=float, default=0.2, help="pit depth for --photo / binary --mask (mm)")
+    p.add_argument("--gear", choices=["pinion", "wheel"], default="pinion", help="gear that carries the pits")
+    p.add_argument("--grid", default="219x1000", help="flank grid ROWSxCOLS (profile x face), default 219x1000")
+    p.add_argument("--positions-per-cycle", type=int, default=64)
+    p.add_argument("--n-slices", type=int, default=None)
+    p.add_argument("--pit-model", choices=PIT_MODELS, default="no_contact")
+    p.add_argument("--out", type=Path, default=Path("gearpit_out/stiffness"), help="output directory")
+    p.add_argument("--json", action="store_true", help="print a JSON summary on stdout")
+    p.set_defaults(func=run)
+
+
+def parse_grid(text: str) -> tuple[int, int]:
+    try:
+        rows, cols = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise InputError("--grid", text, "ROWSxCOLS with two integers, e.g. 219x1000") from None
+    require(rows >= 2 and cols >= 2, "--grid", text, "at least 2x2 pixels")
+    return rows, cols
+
+
+def build_pits(args, pair):
+    """The pit map the arguments describe (None for a healthy pair); validates everything first."""
+    given = [a for a in ("pits", "mask", "photo") if getattr(args, a) is not None]
+    require(len(given) <= 1, "--pits/--mask/--photo", given, "at most one pit source")
+    if not given:
+        return None
+    rows, cols = parse_grid(args.grid)
+    grid = pair.flank_grid(args.gear, rows, cols)
+    require(0 <= args.tooth < pair._gear(args.gear).teeth, "--tooth", args.tooth,
+            f"a tooth index in [0, {pair._gear(args.gear).teeth - 1}]")
+    require(args.depth_mm > 0, "--depth-mm", args.depth_mm, "a number > 0 (mm)")
+    if args.pits is not None:
+        from datagen.pits import PitSpec
+
+        doc = read_toml(args.pits)
+        check_keys(doc, {"pits"}, "", required={"pits"})
+        return PitSpec.from_dict(doc["pits"]).build(grid, args.gear)
+    if args.mask is not None:
+        from datagen.pitio import load_mask_png
+
+        return load_mask_png(args.mask, grid, gear=args.gear, tooth=args.tooth, depth_m=args.depth_mm * 1e-3)
+    from datagen.photo import pit_map_from_image
+
+    return pit_map_from_image(args.photo, grid, gear=args.gear, tooth=args.tooth, depth_m=args.depth_mm * 1e-3)
+
+
+def write_stiffness_csv(ms, path: Path) -> None:
+    cols = [np.degrees(ms.angle_rad), ms.x_cycles, ms.k_n_per_m]
+    head = ["pinion_angle_deg", "mesh_position_cycles", "k_total_n_per_m"]
+    for s in range(ms.n_slots):
+        cols += [ms.k_slots_n_per_m[:, s], ms.engagement[:, s]]
+        head += [f"k_slot{s}_n_per_m", f"engagement_slot{s}"]
+    with atomic_path(path) as tmp:
+        np.savetxt(tmp, np.column_stack(cols), delimiter=",", header=",".join(head), comments="", fmt="%.9g")
+
+
+def run(args: argparse.Namespace) -> int:
+    pair = load_pair(args.pair) if args.pair else preset(args.preset)
+    pits = build_pits(args, pair)
+    ms = mesh_stiffness(pair, pits=pits, positions_per_cycle=args.positions_per_cycle, n_slices=args.n_slices,
+                        pit_model=args.pit_model)
+    from datagen.stiffness_plot import plot_stiffness
+
+    args.out.mkdir(parents=True, exist_ok=True)
+    write_stiffness_csv(ms, args.out / "stiffness.csv")
+    curves = {"pitted" if pits is not None else "healthy": ms}
+    if pits is not None:
+        curves = {"healthy": mesh_stiffness(pair, positions_per_cycle=args.positions_per_cycle,
+                                            n_slices=ms.n_slices), **curves}
+    with atomic_path(args.out / "stiffness.png") as tmp:
+        plot_stiffness(curves, tmp, title=f"{pair.name}: mesh stiffness over one revolution")
+    summary = ms.summary()
+    if pits is not None:
+        summary["severity_by_tooth"] = {str(t): s for t, s in pits.severities().items()}
+    with atomic_path(args.out / "summary.json") as tmp:
+        tmp.write_text(json.dumps(summary, indent=2))
+    if args.json:
+        print(json.dumps(summary))
+    return 0

@@ -1,0 +1,196 @@
+"""Mesh stiffness against outside references and invariants (each test names source and tolerance)."""
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from datagen.flank import PitMap
+from datagen.geometry import Gear, GearPair, helical_pair_example, spur_pair_example
+from datagen.stiffness import mesh_stiffness, pixel_stiffness_map
+from stiffness_reference import pair_stiffness_per_width
+
+
+def _spur_twin_of_helical():
+    """A spur pair with the helical preset's transverse geometry (m = m_t, alpha = alpha_t).
+
+    The 17-tooth spur pinion would just undercut (h_a* - x <= 0.978 needed), so it gets x = +0.03 and the
+    wheel x = -0.03: same centre distance and working pressure angle, 0.3 % more pinion addendum.
+    """
+    h = helical_pair_example()
+    return GearPair(pinion=replace(h.pinion, profile_shift=0.03), wheel=replace(h.wheel, profile_shift=-0.03), module_n_m=h.module_t_m, pressure_angle_n_rad=h.pressure_angle_t_rad,
+                    helix_angle_rad=0.0, material=h.material, name="spur-twin")
+
+
+def test_iso6336_mean_stiffness_range():
+    """ISO 6336-1 method B: c_gamma ~ 20 N/(mm um) for standard steel spur gears; accepted 12..25."""
+    for pair in (spur_pair_example(), _spur_twin_of_helical()):
+        s = mesh_stiffness(pair).summary()
+        assert 12.0 <= s["mean_n_per_mm_um"] <= 25.0, s
+
+
+@pytest.mark.parametrize("pair_fn", [spur_pair_example, helical_pair_example])
+def test_agrees_with_quad_reference(pair_fn):
+    """Independent slow oracle (scipy quad on the angular PE formulas, tests/stiffness_reference.py): 0.5 %."""
+    pair = pair_fn()
+    ms = mesh_stiffness(pair, positions_per_cycle=16, n_slices=40)
+    A, E, pb = pair.contact_start_m, pair.contact_end_m, pair.base_pitch_m
+    b = pair.contact_face_width_m
+    w = (np.arange(40) + 0.5) * b / 40
+    shift = w * math.tan(pair.base_helix_angle_rad)
+    for i in range(0, 16, 3):
+        x = ms.x_cycles[i]
+        ref = 0.0
+        for s in range(ms.n_slots):
+            for g in A + (x + s) * pb - shift:
+                if A <= g <= E:
+                    ref += pair_stiffness_per_width(pair, g) * b / 40
+        assert ms.k_n_per_m[i] == pytest.approx(ref, rel=5e-3)
+
+
+def test_single_pair_stiffness_agrees_with_ross():
+    """ROSS GearElementTVMS (ross-rotordynamics 2.3.0, trochoid fillet, quad per position) on the same spur
+    pair: mean stiffness in the single-contact zone within 10 %."""
+    ross_gear = pytest.importorskip("ross.gear_element")
+    from ross.materials import Material as RossMaterial
+
+    pair = spur_pair_example()
+    steel = RossMaterial(name="gearpit-steel", rho=pair.material.density_kg_m3, E=pair.material.youngs_modulus_pa,
+                         Poisson=pair.material.poisson)
+    g1 = ross_gear.GearElementTVMS(n=0, material=steel, width=pair.pinion.face_width_m,
+                                   bore_diameter=2 * pair.pinion.bore_radius_m, module=pair.module_n_m,
+                                   n_teeth=pair.pinion.teeth, pr_angle=pair.pressure_angle_n_rad)
+    g2 = ross_gear.GearElementTVMS(n=1, material=steel, width=pair.wheel.face_width_m,
+                                   bore_diameter=2 * pair.wheel.bore_radius_m, module=pair.module_n_m,
+                                   n_teeth=pair.wheel.teeth, pr_angle=pair.pressure_angle_n_rad)
+    mesh = ross_gear.Mesh(g1, g2)
+    _, k_ross = mesh.get_stiffness_for_mesh_period(n_points=400)
+    k_ross = np.asarray(k_ross)
+    single_ross = k_ross[k_ross < 0.5 * (k_ross.min() + k_ross.max())]
+    ms = mesh_stiffness(pair, positions_per_cycle=400)
+    k = ms.k_n_per_m[:400]
+    single = k[(ms.k_slots_n_per_m[:400] > 0).sum(axis=1) == 1]
+    assert single.mean() == pytest.approx(single_ross.mean(), rel=0.10)
+
+
+def test_double_contact_fraction_equals_eps_alpha_minus_one():
+    """Spur invariant: fraction of the mesh cycle with two pairs = eps_alpha - 1 (to one position, 1/500)."""
+    pair = spur_pair_example()
+    ms = mesh_stiffness(pair, positions_per_cycle=500)
+    n_pairs = (ms.k_slots_n_per_m > 0).sum(axis=1)
+    assert set(np.unique(n_pairs)) == {1, 2}
+    assert (n_pairs == 2).mean() == pytest.approx(pair.contact_ratio_transverse - 1, abs=1 / 500 + 1e-12)
+
+
+def test_healthy_stiffness_periodic_with_mesh_period():
+    """Invariant: without pits k(x + 1 cycle) = k(x) to round-off."""
+    for pair in (spur_pair_example(), helical_pair_example()):
+        ms = mesh_stiffness(pair, positions_per_cycle=50)
+        k = ms.k_n_per_m.reshape(ms.period_cycles, 50)
+        np.testing.assert_allclose(k, np.broadcast_to(k[0], k.shape), rtol=1e-12)
+
+
+def test_helical_ripple_much_smaller_than_spur():
+    """Helical paper / slice method: overlap smooths the mesh; ripple (p-p/mean) at least 3x below the spur twin."""
+    r_hel = mesh_stiffness(helical_pair_example(), n_slices=200).summary()["ripple_peak_to_peak_over_mean"]
+    r_spur = mesh_stiffness(_spur_twin_of_helical()).summary()["ripple_peak_to_peak_over_mean"]
+    assert r_hel * 3 <= r_spur
+
+
+def _rect_pits(pair, tooth, rows, cols, depth=0.2e-3, shape=(60, 80), gear="pinion"):
+    grid = pair.flank_grid(gear, *shape)
+    d = np.zeros(grid.shape)
+    d[rows[0]:rows[1], cols[0]:cols[1]] = depth
+    return PitMap(grid=grid, depth_m={tooth: d}, gear=gear)
+
+
+@pytest.mark.parametrize("pair_fn", [spur_pair_example, helical_pair_example])
+def test_pit_acts_only_while_pitted_tooth_in_contact(pair_fn):
+    """Pixel model: a pit on tooth q changes k only for x in [q, q + eps_alpha + eps_beta] (engagement q)."""
+    pair = pair_fn()
+    q = 4
+    pits = _rect_pits(pair, q, (20, 40), (20, 60))
+    h = mesh_stiffness(pair, positions_per_cycle=40, n_slices=80)
+    p = mesh_stiffness(pair, pits=pits, positions_per_cycle=40, n_slices=80)
+    diff = p.k_n_per_m - h.k_n_per_m
+    changed = np.abs(diff) > 1e-9 * h.mean_n_per_m
+    assert changed.any()
+    x = p.x_cycles[changed]
+    assert x.min() >= q and x.max() <= q + pair.contact_ratio_total + 1e-9
+    assert np.all(diff <= 1e-6)  # never stiffer with the no-contact model
+
+
+def test_drop_grows_with_pitted_contact_length():
+    """Spur: a pit band across more of the face removes more contact length -> larger stiffness drop."""
+    pair = spur_pair_example()
+    h = mesh_stiffness(pair, positions_per_cycle=40, n_slices=80)
+    drops = []
+    for width in (10, 30, 60):
+        p = mesh_stiffness(pair, pits=_rect_pits(pair, 2, (25, 35), (0, width)), positions_per_cycle=40, n_slices=80)
+        drops.append((h.k_n_per_m - p.k_n_per_m).max())
+    assert drops[0] < drops[1] < drops[2]
+    # the drop at full contact loss of a fraction f of a single pair ~ f * k_single (slices are independent)
+    assert drops[2] / h.k_n_per_m.min() == pytest.approx(60 / 80, rel=0.15)
+
+
+def test_section_loss_grows_with_depth_for_loads_above_the_pit():
+    """Section loss (Ma et al. 2015): deeper pits below the load point make the slice softer."""
+    pair = spur_pair_example()
+    vals = []
+    for depth in (0.05e-3, 0.2e-3, 0.5e-3):
+        pits = _rect_pits(pair, 0, (5, 20), (0, 80), depth=depth)
+        m = pixel_stiffness_map(pair, pits, 0)
+        vals.append(m[40:, :].mean())  # rows above the pit
+    assert vals[0] > vals[1] > vals[2]
+
+
+def test_pixel_map_consistent_with_revolution_assembly():
+    """Two code paths: the pixel stiffness map summed along a row equals the spur total of that pair when the
+    row is on the contact line alone (single-contact zone). Tolerance 1 % (row/position quantisation)."""
+    pair = spur_pair_example()
+    pits = _rect_pits(pair, 0, (20, 40), (10, 50), shape=(60, 80))
+    ms = mesh_stiffness(pair, pits=pits, positions_per_cycle=400, n_slices=80)
+    pmap = pixel_stiffness_map(pair, pits, 0)
+    grid = pits.grid
+    t_sap, _ = pair.active_roll_range_rad("pinion")
+    rb = pair.base_radius_m("pinion")
+    checked = 0
+    for i in range(400):
+        if ms.engagement[i, 0] != 0 or ms.k_slots_n_per_m[i, 1] > 0:
+            continue
+        g = pair.contact_start_m + ms.x_cycles[i] * pair.base_pitch_m
+        s = rb * ((g / rb) ** 2 - t_sap**2) / 2
+        row = int(s / grid.ds_m)
+        if abs(s / grid.ds_m - row - 0.5) > 0.3:
+            continue
+        assert ms.k_slots_n_per_m[i, 0] == pytest.approx(pmap[row].sum(), rel=0.01)
+        checked += 1
+    assert checked > 10
+
+
+def test_weak_spring_model_is_milder_than_no_contact():
+    """Spur paper's weak springs keep the pitted pixels loaded (Hertz term dropped) -> smaller drop than no-contact."""
+    pair = spur_pair_example()
+    pits = _rect_pits(pair, 1, (20, 40), (10, 70))
+    nc = mesh_stiffness(pair, pits=pits, positions_per_cycle=40, n_slices=80)
+    ws = mesh_stiffness(pair, pits=pits, positions_per_cycle=40, n_slices=80, pit_model="weak_spring")
+    assert nc.k_n_per_m.min() < ws.k_n_per_m.min()
+
+
+def test_wheel_pits_period_is_wheel_revolution():
+    """Pits on the wheel: the record covers one wheel revolution (z2 mesh cycles) and shows the pitted wheel tooth."""
+    pair = spur_pair_example()
+    pits = _rect_pits(pair, 7, (20, 40), (0, 80), gear="wheel")
+    ms = mesh_stiffness(pair, pits=pits, positions_per_cycle=20, n_slices=80)
+    assert ms.period_cycles == pair.wheel.teeth
+    h = mesh_stiffness(pair, positions_per_cycle=20, n_slices=80)
+    diff = ms.k_n_per_m - np.tile(h.k_n_per_m[:20], pair.wheel.teeth)
+    x = ms.x_cycles[np.abs(diff) > 1e-9 * h.mean_n_per_m]
+    assert x.min() >= 7 and x.max() <= 7 + pair.contact_ratio_transverse
+
+
+def test_weighted_of_one_is_pair_stiffness():
+    """weighted(f=1) sums slice stiffness: equals the per-pair stiffness (rel 1e-12)."""
+    pair = helical_pair_example()
+    ms = mesh_stiffness(pair, pits=_rect_pits(pair, 3, (10, 30), (5, 40)), positions_per_cycle=16, n_slices=40)
+    np.testing.assert_allclose(ms.weighted(lambda g, p, w: np.ones_like(g)), ms.k_slots_n_per_m, rtol=1e-12)
