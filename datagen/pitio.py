@@ -1,0 +1,169 @@
+"""Pit maps on disk: PNG images a user can paint, and compressed NPZ archives.
+
+PNG: one grayscale image per tooth, rows = profile (row 0 = start of active
+profile), columns = face, exactly the flank grid's shape.
+
+- 16-bit PNG: pixel value = pit depth in micrometres (0 = intact), so depths
+  round-trip to 1 um (a pitted pixel shallower than 1 um is stored as 1 um so it
+  stays pitted); written by :func:`write_depth_png` / :func:`save_pit_pngs`.
+- 8-bit or 1-bit PNG (gray or colour, e.g. painted by hand): a mask; pixels with
+  gray value >= 128 (white) are pits of depth ``default_depth_m``, or the dark
+  ones with ``invert=True``.
+
+One tooth from one PNG: :func:`load_mask_png`; a directory of ``tooth_NNN.png``
+files: :func:`save_pit_pngs` / :func:`load_pit_pngs`.
+
+NPZ (:func:`save_npz`, :func:`load_npz`): a compressed archive with the grid
+fields, the gear, the tooth indices and the depth arrays (m) in float64, so a
+pit map round-trips exactly. Keys: ``format`` (``"gearpit.pitmap/1"``),
+``n_profile``, ``n_face``, ``profile_length_m``, ``face_width_m``,
+``pitch_s_m``, ``gear``, ``teeth`` (k,), ``depth_m`` (k, n_profile, n_face).
+
+Every write is atomic (:func:`gearpit.atomic.atomic_path`).
+"""
+from __future__ import annotations
+
+import re
+import zipfile
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from datagen.flank import FlankGrid, PitMap
+from datagen.pitshapes import DEFAULT_DEPTH_M
+from gearpit.atomic import atomic_path
+from gearpit.errors import InputError, require, require_positive
+
+NPZ_FORMAT = "gearpit.pitmap/1"
+_TOOTH_PNG = re.compile(r"^tooth_(\d+)\.png$")
+_UM = 1e-6
+_MAX_UM = np.iinfo(np.uint16).max
+
+
+def tooth_png_name(tooth: int) -> str:
+    """File name of one tooth's PNG in a pit-map directory: ``tooth_007.png``."""
+    return f"tooth_{int(tooth):03d}.png"
+
+
+def write_depth_png(path: str | Path, depth_m: np.ndarray) -> Path:
+    """Write one depth map (m) as a 16-bit grayscale PNG in micrometres."""
+    d = np.asarray(depth_m, dtype=np.float64)
+    require(d.ndim == 2, "png.depth_m.shape", d.shape, "a 2-D array (profile rows, face columns)")
+    require(bool(np.all(np.isfinite(d))) and bool(np.all(d >= 0)), "png.depth_m", "negative or non-finite values",
+            "finite depths >= 0 m")
+    require(float(d.max(initial=0.0)) <= _MAX_UM * _UM, "png.depth_m", float(d.max(initial=0.0)),
+            f"depths <= {_MAX_UM} um (16-bit PNG in micrometres)")
+    um = np.where(d > 0, np.maximum(np.rint(d / _UM), 1), 0).astype(np.uint16)
+    ok, buf = cv2.imencode(".png", um)
+    if not ok:  # pragma: no cover - OpenCV always encodes uint16 gray PNG
+        raise InputError("png", str(path), "an image OpenCV can encode")
+    target = Path(path)
+    with atomic_path(target) as tmp:
+        tmp.write_bytes(buf.tobytes())
+    return target
+
+
+def read_depth_png(path: str | Path, grid: FlankGrid, *, default_depth_m: float = DEFAULT_DEPTH_M,
+                   invert: bool = False) -> np.ndarray:
+    """Depth map (m) of one tooth from a PNG (see the module docstring for the two kinds).
+
+    Parameters
+    ----------
+    path : path
+    grid : FlankGrid
+        The image must have exactly ``grid.shape`` (rows = profile, columns = face).
+    default_depth_m : float
+        Depth (m) given to the pits of an 8-/1-bit mask image.
+    invert : bool
+        For a mask image: dark pixels (< 128) are the pits.
+
+    Raises
+    ------
+    InputError
+        Unreadable file, wrong shape, or an unsupported pixel type.
+    """
+    require_positive("png.default_depth_m", default_depth_m)
+    img = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+    if img is None:
+        raise InputError("png", str(path), "a readable PNG file")
+    if img.ndim == 3:
+        img = cv2.cvtColor(img[:, :, :3], cv2.COLOR_BGR2GRAY)
+    if img.shape != grid.shape:
+        raise InputError(f"png.shape ({Path(path).name})", img.shape,
+                         f"the flank grid shape {grid.shape} (rows = profile, columns = face)")
+    if img.dtype == np.uint16:
+        return img.astype(np.float64) * _UM
+    require(img.dtype == np.uint8, f"png.dtype ({Path(path).name})", str(img.dtype),
+            "8-bit (mask) or 16-bit (depth in um) grayscale")
+    pit = img < 128 if invert else img >= 128
+    return np.where(pit, float(default_depth_m), 0.0)
+
+
+def load_mask_png(path: str | Path, grid: FlankGrid, *, gear: str = "pinion", tooth: int = 0,
+                  depth_m: float = DEFAULT_DEPTH_M, invert: bool = False) -> PitMap:
+    """Pit map with one tooth read from one PNG (16-bit depth in um, or a painted mask at ``depth_m``).
+
+    See :func:`read_depth_png`; ``depth_m`` (m) is only used for 8-/1-bit masks.
+    """
+    require(isinstance(tooth, (int, np.integer)) and not isinstance(tooth, bool) and tooth >= 0, "pits.tooth",
+            tooth, "an integer >= 0")
+    depth = read_depth_png(path, grid, default_depth_m=depth_m, invert=invert)
+    return PitMap(grid=grid, depth_m={int(tooth): depth}, gear=gear)
+
+
+def save_pit_pngs(pit_map: PitMap, directory: str | Path) -> list[Path]:
+    """Write one 16-bit depth PNG per tooth of ``pit_map`` (``tooth_007.png``, ...) into ``directory``."""
+    out = Path(directory)
+    return [write_depth_png(out / tooth_png_name(t), d) for t, d in sorted(pit_map.depth_m.items())]
+
+
+def load_pit_pngs(directory: str | Path, grid: FlankGrid, *, gear: str = "pinion",
+                  default_depth_m: float = DEFAULT_DEPTH_M, invert: bool = False) -> PitMap:
+    """Pit map from the ``tooth_NNN.png`` files of a directory (see :func:`read_depth_png`)."""
+    d = Path(directory)
+    require(d.is_dir(), "pits.directory", str(d), "an existing directory of tooth_NNN.png files")
+    files = {int(m.group(1)): p for p in sorted(d.iterdir()) if (m := _TOOTH_PNG.match(p.name))}
+    require(len(files) > 0, "pits.directory", str(d), "a directory holding tooth_NNN.png files")
+    depth = {t: read_depth_png(p, grid, default_depth_m=default_depth_m, invert=invert) for t, p in files.items()}
+    return PitMap(grid=grid, depth_m=depth, gear=gear)
+
+
+def save_npz(pit_map: PitMap, path: str | Path) -> Path:
+    """Write a pit map with its grid to a compressed NPZ archive (exact round trip)."""
+    teeth = sorted(pit_map.depth_m)
+    g = pit_map.grid
+    stack = (np.stack([pit_map.depth_m[t] for t in teeth]) if teeth
+             else np.zeros((0,) + g.shape, dtype=np.float64))
+    target = Path(path)
+    with atomic_path(target) as tmp:
+        with open(tmp, "wb") as fh:
+            np.savez_compressed(fh, format=np.array(NPZ_FORMAT), n_profile=np.int64(g.n_profile),
+                                n_face=np.int64(g.n_face), profile_length_m=np.float64(g.profile_length_m),
+                                face_width_m=np.float64(g.face_width_m), pitch_s_m=np.float64(g.pitch_s_m),
+                                gear=np.array(pit_map.gear), teeth=np.asarray(teeth, dtype=np.int64),
+                                depth_m=stack.astype(np.float64))
+    return target
+
+
+def load_npz(path: str | Path) -> PitMap:
+    """Read a pit map written by :func:`save_npz`; a missing key or wrong shape raises InputError."""
+    p = Path(path)
+    try:
+        with np.load(p, allow_pickle=False) as z:
+            data = {k: z[k] for k in z.files}
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+        raise InputError("npz", str(p), f"a readable gearpit pit-map NPZ ({exc})") from None
+    keys = ("format", "n_profile", "n_face", "profile_length_m", "face_width_m", "pitch_s_m", "gear", "teeth",
+            "depth_m")
+    for key in keys:
+        require(key in data, f"npz.{key}", None, f"present in {p.name} (keys: {', '.join(keys)})")
+    require(str(data["format"]) == NPZ_FORMAT, "npz.format", str(data["format"]), NPZ_FORMAT)
+    grid = FlankGrid(n_profile=int(data["n_profile"]), n_face=int(data["n_face"]),
+                     profile_length_m=float(data["profile_length_m"]), face_width_m=float(data["face_width_m"]),
+                     pitch_s_m=float(data["pitch_s_m"]))
+    teeth, depth = data["teeth"], data["depth_m"]
+    expected = (teeth.size,) + grid.shape
+    if depth.shape != expected:
+        raise InputError("npz.depth_m.shape", depth.shape, f"{expected} (teeth, profile rows, face columns)")
+    return PitMap(grid=grid, depth_m={int(t): depth[i] for i, t in enumerate(teeth)}, gear=str(data["gear"]))

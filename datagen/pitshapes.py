@@ -1,0 +1,389 @@
+"""Drawing pits on a flank grid: single ellipses and rectangles, progressive clusters.
+
+Every position and size is in metres on the flank: ``s`` along the profile from
+the start of the active profile, ``w`` across the face from one edge (see
+:class:`datagen.flank.FlankGrid`). A pixel belongs to a pit when its centre lies
+inside the pit outline, so the pit footprint is a pixel set and the severity
+(pitted area / flank area) is the fraction of pitted pixels.
+
+Depth profiles (one vocabulary, :data:`DEPTH_PROFILES`):
+
+- ``"flat"`` (default) -- the same depth everywhere in the pit, as the helical
+  paper's "uniform depth of 0.2 mm" [1]_;
+- ``"bowl"`` -- a paraboloid ``depth_m * max(1 - r**2, BOWL_RIM_FRACTION)``
+  with ``r`` the normalised distance from the pit centre (1 on the outline); the
+  floor at the rim keeps the footprint identical to the flat pit's (real pits
+  have steep walls).
+
+Overlapping pits keep the larger depth. Functions sized to a severity
+(:func:`sized_pit`, :func:`cluster`) land within ``tolerance`` (default
+:func:`default_tolerance`, ``max(0.002, 4 / pixels)``) of the target or raise
+:class:`InputError`. Per-tooth maps and the TOML description are in
+:mod:`datagen.pits`.
+
+References
+----------
+.. [1] Dynamics and diagnostics of fatigue pitting in helical gears: a combined
+   simulation and experimental study (ellipsoidal / rectangular pits, uniform
+   depth 0.2 mm); /work/shared/seeds/001_79b645ef5780dc4a.txt.
+.. [2] Spur-gear pitting model based on image processing (pits made near the
+   pitch line, severities 15/20/25 % of the flank, 219 x 1000 pixel flank);
+   /work/shared/seeds/000_3879ffd8da6fd0be.txt.
+"""
+from __future__ import annotations
+
+import math
+import numpy as np
+
+from datagen.flank import FlankGrid
+from gearpit.errors import InputError, require, require_positive, require_range
+
+DEPTH_PROFILES = ("flat", "bowl")
+#: depth at the rim of a "bowl" pit, as a fraction of its maximum depth
+BOWL_RIM_FRACTION = 0.1
+#: default pit depth (m): the helical paper's uniform 0.2 mm [1]
+DEFAULT_DEPTH_M = 0.2e-3
+#: highest severity a progressive cluster is asked to reach (beyond it the flank is spalled)
+CLUSTER_MAX_SEVERITY = 0.6
+_BATCH = 256  # cluster pits drawn per batch (fixed, so the sequence never depends on the target)
+
+
+def default_tolerance(grid: FlankGrid) -> float:
+    """Allowed |achieved - target| severity: ``max(0.002, 4 / pixels)``."""
+    return max(0.002, 4.0 / (grid.n_profile * grid.n_face))
+
+
+# ---------------------------------------------------------------- single pits
+
+def _window(grid: FlankGrid, cs: float, cw: float, hs: float, hw: float):
+    """Row and column slices of the pixels whose centres lie in a bounding box."""
+    r0 = max(0, math.ceil((cs - hs) / grid.ds_m - 0.5))
+    r1 = min(grid.n_profile, math.floor((cs + hs) / grid.ds_m - 0.5) + 1)
+    c0 = max(0, math.ceil((cw - hw) / grid.dw_m - 0.5))
+    c1 = min(grid.n_face, math.floor((cw + hw) / grid.dw_m - 0.5) + 1)
+    return slice(r0, max(r0, r1)), slice(c0, max(c0, c1))
+
+
+def _radius(grid: FlankGrid, kind: str, cs: float, cw: float, half_s: float, half_w: float, angle: float):
+    """Window slices and normalised radius ``r`` (<= 1 inside) of one pit outline."""
+    c, s = math.cos(angle), math.sin(angle)
+    if kind == "ellipse":
+        hs, hw = math.hypot(half_s * c, half_w * s), math.hypot(half_s * s, half_w * c)
+    else:
+        hs, hw = half_s * abs(c) + half_w * abs(s), half_s * abs(s) + half_w * abs(c)
+    rows, cols = _window(grid, cs, cw, hs, hw)
+    ds = grid.s_centres_m[rows][:, None] - cs
+    dw = grid.w_centres_m[cols][None, :] - cw
+    u = (ds * c + dw * s) / half_s
+    v = (-ds * s + dw * c) / half_w
+    r = np.hypot(u, v) if kind == "ellipse" else np.maximum(np.abs(u), np.abs(v))
+    return rows, cols, r
+
+
+def _depth(r: np.ndarray, depth_m: float, profile: str) -> np.ndarray:
+    inside = r <= 1.0
+    if profile == "flat":
+        return np.where(inside, depth_m, 0.0)
+    return np.where(inside, depth_m * np.maximum(1.0 - r * r, BOWL_RIM_FRACTION), 0.0)
+
+
+def _stamp(out: np.ndarray, grid: FlankGrid, kind: str, cs, cw, axis_s, axis_w, angle, depth_m, profile) -> None:
+    rows, cols, r = _radius(grid, kind, cs, cw, axis_s / 2, axis_w / 2, angle)
+    np.maximum(out[rows, cols], _depth(r, depth_m, profile), out=out[rows, cols])
+
+
+def _check_pit(kind, centre_s_m, centre_w_m, axis_s_m, axis_w_m, depth_m, angle_rad, profile):
+    for name, v in (("centre_s_m", centre_s_m), ("centre_w_m", centre_w_m), ("angle_rad", angle_rad)):
+        require(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v),
+                f"{kind}.{name}", v, "a finite number")
+    require_positive(f"{kind}.axis_s_m", axis_s_m)
+    require_positive(f"{kind}.axis_w_m", axis_w_m)
+    require_positive(f"{kind}.depth_m", depth_m)
+    require(profile in DEPTH_PROFILES, f"{kind}.profile", profile, f"one of: {', '.join(DEPTH_PROFILES)}")
+
+
+def ellipse(grid: FlankGrid, *, centre_s_m: float, centre_w_m: float, axis_s_m: float, axis_w_m: float,
+            depth_m: float, angle_rad: float = 0.0, profile: str = "flat") -> np.ndarray:
+    """Depth map (m) of one elliptical pit, clipped to the flank.
+
+    Parameters
+    ----------
+    grid : FlankGrid
+    centre_s_m, centre_w_m : float
+        Pit centre along the profile and across the face (m).
+    axis_s_m, axis_w_m : float
+        Full axis lengths (m); ``axis_s_m`` lies along the profile when
+        ``angle_rad == 0``.
+    depth_m : float
+        Pit depth (m), the maximum depth for ``profile="bowl"``.
+    angle_rad : float
+        Rotation of the ``axis_s_m`` axis from the profile direction towards
+        the face direction (rad).
+    profile : {"flat", "bowl"}
+        Depth profile, see the module docstring.
+
+    Returns
+    -------
+    ndarray, shape ``grid.shape``
+        Depth (m), 0 outside the pit. An unclipped pit covers
+        ``pi * axis_s_m * axis_w_m / 4`` up to the pixels on its outline.
+    """
+    _check_pit("ellipse", centre_s_m, centre_w_m, axis_s_m, axis_w_m, depth_m, angle_rad, profile)
+    out = np.zeros(grid.shape)
+    _stamp(out, grid, "ellipse", centre_s_m, centre_w_m, axis_s_m, axis_w_m, angle_rad, depth_m, profile)
+    return out
+
+
+def rectangle(grid: FlankGrid, *, centre_s_m: float, centre_w_m: float, axis_s_m: float, axis_w_m: float,
+              depth_m: float, angle_rad: float = 0.0, profile: str = "flat") -> np.ndarray:
+    """Depth map (m) of one rectangular pit, clipped to the flank.
+
+    Same parameters as :func:`ellipse`; ``axis_s_m`` and ``axis_w_m`` are the
+    full side lengths (m), so an unclipped pit covers ``axis_s_m * axis_w_m``.
+    """
+    _check_pit("rectangle", centre_s_m, centre_w_m, axis_s_m, axis_w_m, depth_m, angle_rad, profile)
+    out = np.zeros(grid.shape)
+    _stamp(out, grid, "rectangle", centre_s_m, centre_w_m, axis_s_m, axis_w_m, angle_rad, depth_m, profile)
+    return out
+
+
+# ------------------------------------------------------ sized to a severity
+
+def max_severity(grid: FlankGrid, shape: str, aspect_w_to_s: float | None = None) -> float:
+    """Largest severity ``make_pit_map`` can give one tooth with this shape.
+
+    An ellipse or rectangle must fit whole on the flank (its centre moves off
+    the pitch line towards mid-profile when needed); a cluster stops at
+    :data:`CLUSTER_MAX_SEVERITY`.
+    """
+    if shape == "cluster":
+        return CLUSTER_MAX_SEVERITY
+    aspect = _aspect(grid, aspect_w_to_s)
+    axis_s = min(grid.profile_length_m, grid.face_width_m / aspect)
+    area = axis_s * axis_s * aspect * (math.pi / 4 if shape == "ellipse" else 1.0)
+    return min(1.0, area / (grid.profile_length_m * grid.face_width_m))
+
+
+def _aspect(grid: FlankGrid, aspect_w_to_s: float | None) -> float:
+    return grid.face_width_m / grid.profile_length_m if aspect_w_to_s is None else float(aspect_w_to_s)
+
+
+def sized_pit(grid: FlankGrid, *, shape: str, severity: float, depth_m: float = DEFAULT_DEPTH_M,
+              aspect_w_to_s: float | None = None, profile: str = "flat", tolerance: float | None = None) -> np.ndarray:
+    """One ellipse or rectangle near the pitch line covering ``severity`` of the flank.
+
+    The pit is axis-aligned with ``axis_w_m / axis_s_m = aspect_w_to_s``
+    (default: the flank's own proportions ``face_width_m / profile_length_m``),
+    centred at mid-face and on the pitch line ``grid.pitch_s_m``, moved along
+    the profile just enough to stay whole on the flank. An ellipse's scale is
+    solved by bisection on its pixel count; a rectangle is a block of whole
+    pixels whose row count follows the aspect and whose column count then
+    gives the pixel count closest to the target.
+
+    Returns
+    -------
+    ndarray, shape ``grid.shape``
+        Depth (m), 0 = intact.
+
+    Raises
+    ------
+    InputError
+        ``severity`` outside ``[0, max_severity(grid, shape, aspect_w_to_s)]``
+        (+ tolerance), or not reachable within ``tolerance`` on this grid.
+    """
+    require(shape in ("ellipse", "rectangle"), "pits.shape", shape, "one of: ellipse, rectangle")
+    if aspect_w_to_s is not None:
+        require_positive("pits.aspect_w_to_s", aspect_w_to_s)
+    tol = default_tolerance(grid) if tolerance is None else tolerance
+    require_range("pits.severity", severity, 0.0, min(1.0, max_severity(grid, shape, aspect_w_to_s) + tol))
+    require_positive("pits.depth_m", depth_m)
+    require(profile in DEPTH_PROFILES, "pits.profile", profile, f"one of: {', '.join(DEPTH_PROFILES)}")
+    out = np.zeros(grid.shape)
+    if severity == 0:
+        return out
+    n_pix = grid.n_profile * grid.n_face
+    target = max(1, round(severity * n_pix))
+    aspect = _aspect(grid, aspect_w_to_s)
+    if shape == "rectangle":
+        rows, cols, r = _pixel_block(grid, target, aspect)
+    else:
+        rows, cols, r = _sized_ellipse(grid, target, aspect)
+    _check_reached(severity, np.count_nonzero(r <= 1.0) / n_pix, tol, shape)
+    out[rows, cols] = _depth(r, depth_m, profile)
+    return out
+
+
+def _centre_s(grid: FlankGrid, axis_s: float) -> float:
+    """Pitch line, moved along the profile so a pit of length ``axis_s`` stays whole."""
+    return min(max(grid.pitch_s_m, axis_s / 2), grid.profile_length_m - axis_s / 2)
+
+
+def _sized_ellipse(grid: FlankGrid, target: int, aspect: float):
+    fit_s = min(grid.profile_length_m, grid.face_width_m / aspect)  # axis_s of the largest whole ellipse
+
+    def place(k: float):
+        axis_s = k * fit_s
+        rows, cols, r = _radius(grid, "ellipse", _centre_s(grid, axis_s), grid.face_width_m / 2,
+                                axis_s / 2, axis_s * aspect / 2, 0.0)
+        return rows, cols, r, int(np.count_nonzero(r <= 1.0))
+
+    lo, hi = 0.0, 1.0 + 1e-9
+    best = place(hi)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        cand = place(mid)
+        if abs(cand[3] - target) < abs(best[3] - target):
+            best = cand
+        if cand[3] == target:
+            break
+        lo, hi = (mid, hi) if cand[3] < target else (lo, mid)
+    return best[:3]
+
+
+def _pixel_block(grid: FlankGrid, target: int, aspect: float):
+    n_rows0 = math.sqrt(target * grid.pixel_area_m2 / aspect) / grid.ds_m
+    best = None
+    for n_r in {math.floor(n_rows0), math.ceil(n_rows0), math.ceil(target / grid.n_face)}:
+        n_r = min(max(n_r, 1), grid.n_profile)
+        n_c = min(max(round(target / n_r), 1), grid.n_face)
+        key = (abs(n_r * n_c - target), abs(n_r - n_rows0))
+        if best is None or key < best[0]:
+            best = (key, n_r, n_c)
+    _, n_r, n_c = best
+    r0 = min(max(round(grid.pitch_s_m / grid.ds_m - n_r / 2), 0), grid.n_profile - n_r)
+    c0 = (grid.n_face - n_c) // 2
+    return _radius(grid, "rectangle", (r0 + n_r / 2) * grid.ds_m, (c0 + n_c / 2) * grid.dw_m,
+                   n_r * grid.ds_m / 2, n_c * grid.dw_m / 2, 0.0)
+
+
+def _check_reached(target: float, achieved: float, tol: float, shape: str) -> None:
+    require(abs(achieved - target) <= tol, "pits.severity", target,
+            f"a severity this {shape} reaches within tolerance {tol:g} on this grid "
+            f"(closest {achieved:.5f}); use a finer grid or a larger tolerance")
+
+
+# ----------------------------------------------------------- progressive pits
+
+def cluster(grid: FlankGrid, *, target_severity: float, rng: np.random.Generator, depth_m: float = DEFAULT_DEPTH_M,
+            tolerance: float | None = None, pit_diameter_m: float | None = None, spread_s_m: float | None = None,
+            nucleation_scale: float = 0.02, profile: str = "flat", max_pits: int = 50_000) -> np.ndarray:
+    """Irregular progressive pitting: small pits near the pitch line that grow and merge.
+
+    Pits are drawn one after another, each an ellipse with full major axis
+    ``pit_diameter_m * LogNormal(0, 0.4)``, minor/major ratio ``U(0.5, 1)`` and a
+    random orientation. While the pitted fraction ``f`` is small, pits nucleate
+    afresh at ``s ~ Normal(pitch_s_m, spread_s_m)`` (clipped to the flank) and
+    ``w ~ U(0, face_width_m)``; with probability ``1 - exp(-f /
+    nucleation_scale)`` a pit instead grows from the outline of an earlier one
+    (offset along the profile halved, so damage spreads along the pitch line).
+    Early damage is therefore many small pits near the pitch line, later damage
+    grows and merges them into fewer, larger craters. Pits are added until the
+    pitted fraction reaches ``target_severity``; the last pit is shrunk
+    (bisection on its scale) to land on the target. The pit sequence does not
+    depend on the target, so with the same generator state a larger severity
+    gives a superset of a smaller one's pits (progressive damage).
+
+    Parameters
+    ----------
+    grid : FlankGrid
+    target_severity : float
+        Pitted fraction of the flank, in ``[0, CLUSTER_MAX_SEVERITY]``.
+    rng : numpy.random.Generator
+    depth_m : float
+        Depth of every pit (m), the maximum depth for ``profile="bowl"``.
+    tolerance : float, optional
+        Allowed |achieved - target|; default :func:`default_tolerance`.
+    pit_diameter_m : float, optional
+        Median pit size (m); default 10 % of the smaller flank dimension.
+    spread_s_m : float, optional
+        Standard deviation of new pit centres about the pitch line (m);
+        default 15 % of the profile length.
+    nucleation_scale : float
+        Pitted fraction over which nucleation of new pits dies out (e-fold).
+    profile : {"flat", "bowl"}
+    max_pits : int
+        Guard on the number of pits.
+
+    Returns
+    -------
+    ndarray, shape ``grid.shape``
+        Depth (m), 0 = intact.
+    """
+    tol = default_tolerance(grid) if tolerance is None else tolerance
+    require_range("pits.severity", target_severity, 0.0, CLUSTER_MAX_SEVERITY)
+    require_positive("pits.depth_m", depth_m)
+    require_positive("pits.tolerance", tol)
+    require_positive("pits.nucleation_scale", nucleation_scale)
+    require(profile in DEPTH_PROFILES, "pits.profile", profile, f"one of: {', '.join(DEPTH_PROFILES)}")
+    size = 0.1 * min(grid.profile_length_m, grid.face_width_m) if pit_diameter_m is None else pit_diameter_m
+    spread = 0.15 * grid.profile_length_m if spread_s_m is None else spread_s_m
+    require_positive("pits.pit_diameter_m", size)
+    require_positive("pits.spread_s_m", spread)
+    require(isinstance(rng, np.random.Generator), "pits.rng", type(rng).__name__, "a numpy.random.Generator")
+
+    out = np.zeros(grid.shape)
+    n_pix = grid.n_profile * grid.n_face
+    target = 0 if target_severity == 0 else max(1, round(target_severity * n_pix))
+    count = 0
+    centres: list[tuple[float, float, float]] = []  # (s, w, mean semi-axis) of pits that added area
+    mask = np.zeros(grid.shape, bool)
+    k = 0
+    while count < target:
+        if k >= max_pits:
+            raise InputError("pits.severity", target_severity,
+                             f"a severity reached with at most {max_pits} pits (got {count / n_pix:.4f})")
+        if k % _BATCH == 0:
+            draw = rng.random((_BATCH, 5))
+            normal = rng.standard_normal((_BATCH, 2))
+        u, pick, phi, ecc, theta = draw[k % _BATCH]
+        z_s, z_d = normal[k % _BATCH]
+        k += 1
+        major = size * math.exp(0.4 * z_d)
+        minor = major * (0.5 + 0.5 * ecc)
+        if centres and u >= math.exp(-count / n_pix / nucleation_scale):
+            ps, pw, pr = centres[int(pick * len(centres))]
+            cs, cw = ps + 0.5 * pr * math.cos(2 * math.pi * phi), pw + pr * math.sin(2 * math.pi * phi)
+        else:
+            cs = min(max(grid.pitch_s_m + spread * z_s, 0.0), grid.profile_length_m)
+            cw = grid.face_width_m * pick
+        cs = min(max(cs, 0.0), grid.profile_length_m)
+        cw = min(max(cw, 0.0), grid.face_width_m)
+        angle = math.pi * theta
+        rows, cols, r = _radius(grid, "ellipse", cs, cw, major / 2, minor / 2, angle)
+        new = (r <= 1.0) & ~mask[rows, cols]
+        gain = int(np.count_nonzero(new))
+        if gain == 0:  # wholly inside earlier pits: not a growth front
+            continue
+        last = count + gain > target
+        if last:  # shrink the last pit onto the target
+            r = _shrink_last(r, mask[rows, cols], target - count, count + gain - target)
+            gain = int(np.count_nonzero((r <= 1.0) & ~mask[rows, cols]))
+        mask[rows, cols] |= r <= 1.0
+        np.maximum(out[rows, cols], _depth(r, depth_m, profile), out=out[rows, cols])
+        count += gain
+        centres.append((cs, cw, (major + minor) / 4))
+        if last:
+            break
+    _check_reached(target_severity, count / n_pix, tol, "cluster")
+    return out
+
+
+def _shrink_last(r: np.ndarray, taken: np.ndarray, need: int, over: int) -> np.ndarray:
+    """Rescale radii ``r`` by 1/t so the pit adds the pixel count closest to ``need``."""
+    free = ~taken
+    best_t, best_err = 1.0, over
+    lo, hi = 0.0, 1.0
+    for _ in range(40):
+        t = 0.5 * (lo + hi)
+        gain = int(np.count_nonzero((r <= t) & free))
+        if abs(gain - need) < best_err or (abs(gain - need) == best_err and t < best_t):
+            best_t, best_err = t, abs(gain - need)
+        if gain < need:
+            lo = t
+        elif gain > need:
+            hi = t
+        else:
+            break
+    return r / best_t
+
+

@@ -1,0 +1,164 @@
+"""Pit masks from flank photos (datagen.photo) on synthetic photos rendered here.
+
+The renderer: a pit mask (ellipses or a progressive cluster) is carved into a
+height map (depth 4-5 photo pixels, walls blurred over 1.5-2 pixels), shaded
+Lambertian under a light 40 degrees above the flank from a random azimuth
+(so one wall is lit, the other in shadow), with a dark pit floor (albedo 0.35,
+optionally rough), optional grinding marks on the intact surface, multiplied
+by an uneven illumination (linear and quadratic across the image), plus
+Gaussian noise, then quantised to 8 bits. The acceptance level IoU >= 0.8 is
+the project's requirement for the photo route (issue 2); measured IoU on these
+photos is 0.85-0.94.
+"""
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+from scipy import ndimage
+
+from datagen.flank import FlankGrid
+from datagen.photo import extraction_steps, flank_crop_box, mask_from_image, pit_map_from_image, resample_mask
+from datagen.pits import cluster, ellipse
+from gearpit.errors import InputError
+
+PHOTO = (240, 800)  # photo pixels of the flank (rows = profile, columns = face)
+GRID = FlankGrid(n_profile=60, n_face=200, profile_length_m=6e-3, face_width_m=20e-3, pitch_s_m=2.8e-3)
+
+#: lighting/noise settings: mild = linear light gradient, 2 % noise;
+#: harsh = strong linear + quadratic light, 5 % noise, grinding marks, rough pit floors, wider walls
+SETTINGS = {
+    "mild": dict(light_gradient=0.4, quad=0.0, noise=0.02),
+    "harsh": dict(light_gradient=0.8, quad=0.4, noise=0.05, texture=0.05, rough=0.4, blur_px=2.0, pit_depth_px=5.0),
+}
+
+
+def truth_mask(seed: int) -> np.ndarray:
+    """Known pit mask at photo resolution: three random ellipses (even seeds) or a cluster (odd seeds)."""
+    g = FlankGrid(PHOTO[0], PHOTO[1], 6e-3, 20e-3, 2.8e-3)
+    rng = np.random.default_rng(seed)
+    if seed % 2:
+        return cluster(g, target_severity=rng.uniform(0.08, 0.25), rng=rng) > 0
+    d = np.zeros(g.shape)
+    for _ in range(3):
+        d = np.maximum(d, ellipse(g, centre_s_m=rng.uniform(1.5e-3, 4.5e-3), centre_w_m=rng.uniform(2e-3, 18e-3),
+                                  axis_s_m=rng.uniform(0.8e-3, 2.5e-3), axis_w_m=rng.uniform(1e-3, 4e-3),
+                                  depth_m=1.0, angle_rad=rng.uniform(0, np.pi)))
+    return d > 0
+
+
+def render_flank_photo(mask: np.ndarray, seed: int, *, light_gradient: float, quad: float, noise: float,
+                       texture: float = 0.0, rough: float = 0.0, blur_px: float = 1.5, pit_depth_px: float = 4.0,
+                       margin: int = 0) -> np.ndarray:
+    """8-bit photo of a flank carrying ``mask`` (see the module docstring); ``margin`` adds a dark frame."""
+    rng = np.random.default_rng(seed + 1000)
+    h_px, w_px = mask.shape
+    m = mask.astype(float)
+    height = -pit_depth_px * ndimage.gaussian_filter(m, blur_px)
+    gy, gx = np.gradient(height)
+    normal = np.dstack([-gx, -gy, np.ones_like(height)])
+    normal /= np.linalg.norm(normal, axis=2, keepdims=True)
+    elev, azim = np.radians(40), np.radians(rng.uniform(0, 360))
+    light = np.array([np.cos(elev) * np.cos(azim), np.cos(elev) * np.sin(azim), np.sin(elev)])
+    lambert = np.clip(normal @ light, 0, None) / np.sin(elev)
+    soft = ndimage.gaussian_filter(m, 1.0)
+    albedo = 1 - 0.65 * soft
+    if rough:
+        field = ndimage.gaussian_filter(rng.standard_normal(mask.shape), 2.0)
+        albedo *= 1 + rough * field / field.std() * soft
+    if texture:
+        albedo *= 1 + texture * np.sin(np.arange(h_px)[:, None] * 2 * np.pi / 7.0 + rng.uniform(0, 6))
+    y, x = np.mgrid[0:h_px, 0:w_px]
+    illum = 1 + light_gradient * (x / w_px - 0.5) + quad * (4 * (y / h_px - 0.5) ** 2 - 0.5)
+    img = 0.6 * albedo * (0.15 + 0.85 * lambert) * illum + rng.normal(0, noise, mask.shape)
+    if margin:
+        framed = 0.08 + rng.normal(0, noise, (h_px + 2 * margin, w_px + 2 * margin))
+        framed[margin:margin + h_px, margin:margin + w_px] = img
+        img = framed
+    return np.clip(img * 255, 0, 255).astype(np.uint8)
+
+
+def iou(a: np.ndarray, b: np.ndarray) -> float:
+    return float(np.count_nonzero(a & b) / max(np.count_nonzero(a | b), 1))
+
+
+@pytest.mark.parametrize("setting", sorted(SETTINGS))
+@pytest.mark.parametrize("seed", [0, 1, 2, 3, 4, 5])
+def test_mask_from_photo_iou(setting, seed):
+    """IoU >= 0.8 against the known mask on the flank grid (ellipses and clusters, two lighting/noise settings).
+
+    Source: the spur paper's route (Gaussian filter, gradient operator,
+    threshold, morphology); IoU >= 0.8 is the issue's acceptance level.
+    Measured 0.85-0.94.
+    """
+    truth = truth_mask(seed)
+    photo = render_flank_photo(truth, seed, **SETTINGS[setting])
+    mask = mask_from_image(photo, GRID)
+    assert mask.shape == GRID.shape and mask.dtype == bool
+    assert iou(mask, resample_mask(truth, GRID.shape)) >= 0.8
+
+
+def test_blur_background_also_works():
+    """The normalised-blur lighting model reaches the same IoU >= 0.8 on the harsh photos."""
+    for seed in (1, 2):
+        truth = truth_mask(seed)
+        photo = render_flank_photo(truth, seed, **SETTINGS["harsh"])
+        assert iou(mask_from_image(photo, GRID, flatten="blur"), resample_mask(truth, GRID.shape)) >= 0.8
+
+
+def test_uneven_lighting_needs_flattening():
+    """Without flattening the harsh lighting defeats the threshold (IoU < 0.5): the test photos are not trivial."""
+    truth = truth_mask(3)
+    photo = render_flank_photo(truth, 3, **SETTINGS["harsh"])
+    assert iou(mask_from_image(photo, GRID, flatten="none"), resample_mask(truth, GRID.shape)) < 0.5
+
+
+def test_intact_flank_gives_no_pits():
+    """An intact flank under harsh lighting, noise and grinding marks yields an empty mask (no false pits)."""
+    for seed in range(3):
+        photo = render_flank_photo(np.zeros(PHOTO, bool), seed, **SETTINGS["harsh"])
+        assert not extraction_steps(photo).mask.any()
+
+
+def test_auto_crop_and_rotation():
+    """Auto crop finds the flank in a dark frame within 2 pixels; rot90 turns a sideways photo back; IoU >= 0.8."""
+    truth = truth_mask(4)
+    photo = render_flank_photo(truth, 4, margin=30, **SETTINGS["harsh"])
+    box = flank_crop_box(photo / 255.0)
+    assert np.max(np.abs(np.array(box) - [30, 270, 30, 830])) <= 2
+    sideways = np.rot90(photo, -1)  # profile now runs across the image
+    mask = mask_from_image(sideways, GRID, crop="auto", rot90=1)
+    assert iou(mask, resample_mask(truth, GRID.shape)) >= 0.8
+
+
+def test_pit_map_from_file_and_formats(tmp_path):
+    """From a file: one tooth at uniform depth, severity within 0.02 of the truth.
+
+    16-bit and colour versions of the photo give the same mask as the 8-bit gray one.
+    """
+    truth = truth_mask(1)
+    photo = render_flank_photo(truth, 1, **SETTINGS["mild"])
+    cv2.imwrite(str(tmp_path / "flank.png"), photo)
+    pm = pit_map_from_image(tmp_path / "flank.png", GRID, gear="wheel", tooth=6, depth_m=0.15e-3)
+    assert pm.gear == "wheel" and pm.pitted_teeth == [6]
+    np.testing.assert_array_equal(np.unique(pm.depth_m[6]), [0.0, 0.15e-3])
+    assert abs(pm.severity(6) - resample_mask(truth, GRID.shape).mean()) <= 0.02
+    gray = mask_from_image(photo, GRID)
+    np.testing.assert_array_equal(mask_from_image(photo.astype(np.uint16) * 257, GRID), gray)
+    np.testing.assert_array_equal(mask_from_image(cv2.cvtColor(photo, cv2.COLOR_GRAY2BGR), GRID), gray)
+
+
+def test_bad_input_raises_input_error(tmp_path):
+    """Unreadable image names the file; a crop outside the photo and unknown options name their field."""
+    (tmp_path / "broken.jpg").write_bytes(b"\x00garbage")
+    with pytest.raises(InputError, match="broken.jpg"):
+        mask_from_image(tmp_path / "broken.jpg", GRID)
+    with pytest.raises(InputError, match="missing.png"):
+        pit_map_from_image(tmp_path / "missing.png", GRID, tooth=0, depth_m=2e-4)
+    photo = np.full((50, 80), 128, np.uint8)
+    with pytest.raises(InputError) as info:
+        mask_from_image(photo, GRID, crop=(0, 60, 0, 80))
+    assert info.value.field == "image.crop"
+    with pytest.raises(InputError) as info:
+        mask_from_image(photo, GRID, flatten="tophat")
+    assert info.value.field == "image.flatten"
