@@ -1,0 +1,205 @@
+"""Rank features by how well they separate damage classes, follow severity, and
+ignore the operating point.
+
+Criteria, each computed per feature on the rows where it is finite:
+
+- ``f_severity``, ``f_teeth``: one-way ANOVA F statistic between severity classes
+  and between pitted-tooth-count classes (:func:`sklearn.feature_selection.f_classif`).
+  For two classes F is the square of Student's t; for one feature it is the
+  Fisher score times ``(n - C) / (C - 1)``.
+- ``mi_severity``, ``mi_teeth``: mutual information (nats) between the feature and
+  the class (:func:`sklearn.feature_selection.mutual_info_classif`, k-NN estimator
+  of Ross 2014, seeded).
+- ``monotonicity``: ``|Spearman rho|`` between the feature and the continuous
+  severity; ``spearman_severity`` keeps the sign.
+- ``robustness_<col>`` for each nuisance column (speed, SNR): ``S / (S + N_col)``
+  with ``S`` the standard deviation of the severity-class means and ``N_col`` the
+  standard deviation of the means over the levels of ``col`` within one severity
+  class, averaged over classes. 1 when speed (or noise) does not move the feature
+  at all compared with damage, 0.5 when it moves it as much as damage does.
+  ``robustness`` is the smallest of them.
+- ``score``: mean over the criteria of the feature's percentile rank (1 best);
+  ``rank`` orders by it.
+
+References
+----------
+.. [1] Duda, R. O., Hart, P. E., Stork, D. G. (2001). Pattern Classification, 2nd
+   ed., Wiley (Fisher criterion).
+.. [2] Ross, B. C. (2014). Mutual information between discrete and continuous data
+   sets. PLoS ONE 9(2), e87357.
+.. [3] Coble, J., Hines, J. W. (2009). Identifying optimal prognostic parameters from
+   data: a genetic algorithms approach. Annual Conference of the PHM Society
+   (monotonicity as a prognostic-parameter criterion).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from scipy.stats import spearmanr
+from sklearn.feature_selection import f_classif, mutual_info_classif
+from threadpoolctl import threadpool_limits
+
+from gearpit.atomic import atomic_path
+from gearpit.errors import require
+
+#: criteria that enter the score, best = largest
+SCORE_CRITERIA: tuple[str, ...] = ("f_severity", "mi_severity", "monotonicity", "f_teeth", "mi_teeth", "robustness")
+
+
+def _anova_f(v: np.ndarray, y: np.ndarray) -> float:
+    if np.unique(y).size < 2 or v.size < 3 or np.ptp(v) == 0:
+        return float("nan")
+    return float(f_classif(v[:, None], y)[0][0])
+
+
+def _mutual_information(values: np.ndarray, finite: np.ndarray, y: np.ndarray, seed: int) -> np.ndarray:
+    """Per-column MI with ``y``; columns sharing the same finite rows go to sklearn in one call."""
+    out = np.full(values.shape[1], np.nan)
+    groups: dict[bytes, list[int]] = {}
+    for j in range(values.shape[1]):
+        groups.setdefault(np.packbits(finite[:, j]).tobytes(), []).append(j)
+    for cols in groups.values():
+        rows = finite[:, cols[0]]
+        yy = y[rows]
+        block = values[np.ix_(rows, cols)]
+        spread = np.ptp(block, axis=0) if block.shape[0] else np.zeros(len(cols))
+        keep = [c for c, s in zip(cols, spread) if s > 0]
+        if np.unique(yy).size < 2 or block.shape[0] < 4 or not keep:
+            continue
+        sub = values[np.ix_(rows, keep)]
+        sub = (sub - sub.mean(axis=0)) / sub.std(axis=0)
+        # one thread: the k-NN dispatcher's OpenMP start-up dominates on small tables and busy machines
+        with threadpool_limits(1):
+            out[keep] = mutual_info_classif(sub, yy, discrete_features=False, n_neighbors=3, random_state=seed)
+    return out
+
+
+def _robustness(v: np.ndarray, cls: np.ndarray, nuisance: np.ndarray) -> float:
+    if np.unique(cls).size < 2 or np.unique(nuisance).size < 2:
+        return float("nan")
+    _, g = np.unique(nuisance, return_inverse=True)
+    n_cls, n_g = int(cls.max()) + 1, int(g.max()) + 1
+    class_means = np.bincount(cls, weights=v, minlength=n_cls) / np.maximum(np.bincount(cls, minlength=n_cls), 1)
+    present = np.bincount(cls, minlength=n_cls) > 0
+    s = float(np.std(class_means[present]))
+    cell = cls * n_g + g
+    counts = np.bincount(cell, minlength=n_cls * n_g).reshape(n_cls, n_g)
+    sums = np.bincount(cell, weights=v, minlength=n_cls * n_g).reshape(n_cls, n_g)
+    spreads = []
+    for c in np.nonzero(present)[0]:
+        m = sums[c, counts[c] > 0] / counts[c, counts[c] > 0]
+        spreads.append(float(np.std(m)))
+    noise = float(np.mean(spreads))
+    return s / (s + noise) if s + noise > 0 else float("nan")
+
+
+def rank_features(table: pd.DataFrame, feature_columns: list[str] | None = None, *, severity_col: str = "severity",
+                  severity_class_col: str | None = "severity_class", teeth_col: str | None = "n_pitted_teeth",
+                  nuisance_cols: tuple[str, ...] = ("speed_rpm", "snr_db"), seed: int = 0) -> pd.DataFrame:
+    """Rank feature columns of ``table`` (see module docstring for the criteria).
+
+    Parameters
+    ----------
+    table : DataFrame
+        One row per record: feature columns and label columns.
+    feature_columns : list of str, optional
+        Columns to rank; default every numeric column that is not a label or
+        nuisance column.
+    severity_col : str
+        Continuous severity (e.g. pitted area fraction).
+    severity_class_col : str or None
+        Severity class labels; if None or missing, the distinct values of
+        ``severity_col`` are the classes.
+    teeth_col : str or None
+        Number of pitted teeth; skipped if None or missing.
+    nuisance_cols : tuple of str
+        Operating-point columns for the robustness criteria; missing ones are skipped.
+    seed : int
+        Seed of the mutual-information estimator.
+
+    Returns
+    -------
+    DataFrame
+        One row per feature, best first: ``feature, rank, score`` and every criterion.
+    """
+    require(isinstance(table, pd.DataFrame) and len(table) >= 3, "table", type(table).__name__,
+            "a DataFrame with >= 3 rows")
+    require(severity_col in table.columns, "severity_col", severity_col, "a column of the table: " +
+            ", ".join(map(str, table.columns[:12])))
+    cls_col = severity_class_col if severity_class_col in table.columns else severity_col
+    teeth = teeth_col if teeth_col is not None and teeth_col in table.columns else None
+    nuis = [c for c in nuisance_cols if c in table.columns]
+    labels = {severity_col, cls_col, *(c for c in (severity_class_col, teeth_col) if c), *nuisance_cols}
+    if feature_columns is None:
+        feature_columns = [c for c in table.columns if c not in labels and pd.api.types.is_numeric_dtype(table[c])]
+    missing = [c for c in feature_columns if c not in table.columns]
+    require(not missing, "feature_columns", missing[:3], "columns of the table")
+    require(len(feature_columns) >= 1, "feature_columns", feature_columns, "at least one numeric feature column")
+
+    sev = table[severity_col].to_numpy(dtype=float)
+    cls = pd.factorize(table[cls_col])[0]
+    tee = pd.factorize(table[teeth])[0] if teeth else None
+    values = table[feature_columns].to_numpy(dtype=float)
+    finite = np.isfinite(values) & np.isfinite(sev)[:, None]
+    mi_sev = _mutual_information(values, finite, cls, seed)
+    mi_tee = _mutual_information(values, finite, tee, seed) if tee is not None else None
+    rows = []
+    for j, col in enumerate(feature_columns):
+        ok = finite[:, j]
+        vv = values[ok, j]
+        row = {"feature": col, "f_severity": _anova_f(vv, cls[ok]), "mi_severity": float(mi_sev[j])}
+        if vv.size >= 3 and np.ptp(vv) > 0 and np.ptp(sev[ok]) > 0:
+            rho = float(spearmanr(vv, sev[ok]).statistic)
+        else:
+            rho = float("nan")
+        row["spearman_severity"] = rho
+        row["monotonicity"] = abs(rho)
+        if tee is not None:
+            row["f_teeth"] = _anova_f(vv, tee[ok])
+            row["mi_teeth"] = float(mi_tee[j])
+        rob = []
+        for c in nuis:
+            r = _robustness(vv, cls[ok], table[c].to_numpy()[ok])
+            row[f"robustness_{c}"] = r
+            rob.append(r)
+        finite_rob = [r for r in rob if np.isfinite(r)]
+        row["robustness"] = min(finite_rob) if finite_rob else float("nan")
+        rows.append(row)
+    out = pd.DataFrame(rows)
+    crit = [c for c in SCORE_CRITERIA if c in out.columns and out[c].notna().any()]
+    pct = out[crit].rank(pct=True, ascending=True, na_option="keep").fillna(0.0)
+    out["score"] = pct.mean(axis=1)
+    out = out.sort_values(["score", "feature"], ascending=[False, True], kind="mergesort").reset_index(drop=True)
+    out.insert(1, "rank", np.arange(1, len(out) + 1))
+    score = out.pop("score")
+    out.insert(2, "score", score)
+    return out
+
+
+def ranking_markdown(ranking: pd.DataFrame, *, top: int | None = None, digits: int = 3) -> str:
+    """A GitHub Markdown table of the ranking (first ``top`` rows)."""
+    frame = ranking if top is None else ranking.head(top)
+    cols = list(frame.columns)
+
+    def fmt(v) -> str:
+        if isinstance(v, (float, np.floating)):
+            if not np.isfinite(v):
+                return "-"
+            return f"{v:.{digits}g}" if abs(v) >= 1e4 or (v != 0 and abs(v) < 1e-3) else f"{v:.{digits}f}"
+        return str(v)
+
+    lines = ["| " + " | ".join(cols) + " |", "|" + "|".join("---" for _ in cols) + "|"]
+    for _, r in frame.iterrows():
+        lines.append("| " + " | ".join(fmt(r[c]) for c in cols) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def write_ranking(ranking: pd.DataFrame, csv_path: str | Path, markdown_path: str | Path, *,
+                  top: int | None = None) -> None:
+    """Write the full ranking as CSV and (the first ``top`` rows) as Markdown, atomically."""
+    with atomic_path(csv_path) as tmp:
+        ranking.to_csv(tmp, index=False)
+    with atomic_path(markdown_path) as tmp:
+        Path(tmp).write_text(ranking_markdown(ranking, top=top))

@@ -1,0 +1,112 @@
+"""Angular resampling, time-synchronous averaging and the TSA split (features.tsa)."""
+import numpy as np
+import pytest
+
+from features import tsa
+from features.synthetic import gear_signal_example
+from gearpit.errors import InputError
+
+
+def _tone_tsa_amplitude(order: float, n_rev: int, n_per_rev: int = 256) -> float:
+    """Amplitude of a unit tone at a (possibly non-integer) shaft order after TSA, by least squares."""
+    fr = 16.0
+    fs = fr * n_per_rev
+    t = np.arange(n_rev * n_per_rev) / fs
+    x = np.cos(2 * np.pi * order * fr * t + 0.3)
+    track = tsa.angle_track_constant_speed(x.size, fs, fr)
+    avg = tsa.synchronous_average(x, fs, track, samples_per_rev=n_per_rev).average
+    theta = 2 * np.pi * np.arange(n_per_rev) / n_per_rev
+    basis = np.column_stack([np.cos(order * theta), np.sin(order * theta)])
+    coef, *_ = np.linalg.lstsq(basis, avg, rcond=None)
+    return float(np.hypot(*coef))
+
+
+def test_non_synchronous_tone_follows_comb_filter():
+    """A tone at order k + delta is scaled by |sin(pi R delta) / (R sin(pi delta))| (McFadden 1987);
+    R = 16 revolutions, fs / fr integer; tol 3e-5 (resampling filter ripple ~1e-5 and edge samples)."""
+    R = 16
+    for delta in (0.1, 0.25, 0.5, 0.73):
+        expected = abs(np.sin(np.pi * R * delta) / (R * np.sin(np.pi * delta)))
+        assert _tone_tsa_amplitude(5 + delta, R) == pytest.approx(expected, abs=3e-5)
+    assert _tone_tsa_amplitude(5.0, R) == pytest.approx(1.0, abs=3e-5)  # synchronous: kept
+
+
+def test_non_synchronous_tone_attenuated_by_one_over_sqrt_revolutions():
+    """Power gain of TSA averaged over the tone's offset delta in (0, 1) is 1/R exactly (a midpoint grid of
+    M >= R points integrates the Fejer kernel exactly), i.e. amplitude ~ 1/sqrt(R); measured, tol 1 %."""
+    R = 16
+    deltas = (np.arange(R) + 0.5) / R
+    power = np.mean([_tone_tsa_amplitude(7 + d, R) ** 2 for d in deltas])
+    assert np.sqrt(power) == pytest.approx(1 / np.sqrt(R), rel=0.01)
+
+
+def test_white_noise_rms_falls_as_one_over_sqrt_revolutions():
+    """TSA of white noise over R = 64 revolutions has RMS sigma / sqrt(R) (McFadden 1987); tol 10 %, seeded."""
+    fs, fr, n_per_rev, R = 4096.0, 16.0, 256, 64
+    x = np.random.default_rng(5).standard_normal(R * n_per_rev)
+    avg = tsa.synchronous_average(x, fs, tsa.angle_track_constant_speed(x.size, fs, fr), samples_per_rev=n_per_rev)
+    assert avg.n_revolutions == R
+    assert np.std(avg.average) == pytest.approx(1 / np.sqrt(R), rel=0.10)
+
+
+def test_synchronous_tone_survives_non_integer_resampling():
+    """fr = 23.7 Hz at fs = 12.8 kHz (540.08 samples/rev, resampled to 1024): orders 28 and 84 keep amplitude
+    1 and 0.3 within 2e-3 (polyphase x4 + cubic-spline interpolation error)."""
+    fs, fr = 12800.0, 23.7
+    t = np.arange(12800) / fs
+    x = np.cos(2 * np.pi * 28 * fr * t) + 0.3 * np.sin(2 * np.pi * 84 * fr * t)
+    n = tsa.default_samples_per_rev(fs, fr)
+    assert n == 1024
+    avg = tsa.synchronous_average(x, fs, tsa.angle_track_constant_speed(x.size, fs, fr), samples_per_rev=n)
+    amp = tsa.order_amplitudes(avg.average)
+    assert amp[28] == pytest.approx(1.0, abs=2e-3)
+    assert amp[84] == pytest.approx(0.3, abs=2e-3)
+
+
+def test_tacho_and_mesh_phase_tracks_follow_speed_fluctuation():
+    """Pinion speed fluctuating +/-1 % at 2 Hz: TSA from the tacho or from the mesh phase keeps the mesh tone
+    (amplitude 1) within 3 %; the nominal-speed TSA smears it below 0.5 (it is what angular resampling is for)."""
+    s = gear_signal_example(speed_fluctuation=0.01, snr_db=None, runout=0.0, mesh_amplitudes=(1.0,))
+    n = tsa.default_samples_per_rev(s.fs_hz, s.fr_pinion_hz)
+    tracks = {
+        "tacho": tsa.angle_track_from_tacho(s.tacho, s.fs_hz),
+        "mesh": tsa.angle_track_from_mesh_phase(s.x, s.fs_hz, mesh_order=28, shaft_hz_nominal=s.fr_pinion_hz,
+                                                half_band_hz=12.0),
+        "nominal": tsa.angle_track_constant_speed(s.x.size, s.fs_hz, s.fr_pinion_hz),
+    }
+    amp = {k: tsa.order_amplitudes(tsa.synchronous_average(s.x, s.fs_hz, tr, samples_per_rev=n).average)[28]
+           for k, tr in tracks.items()}
+    assert amp["tacho"] == pytest.approx(1.0, abs=0.03)
+    assert amp["mesh"] == pytest.approx(1.0, abs=0.03)
+    assert amp["nominal"] < 0.5
+
+
+def test_tacho_pulse_times_are_sub_sample_accurate():
+    """Rising edges of a sampled sine 'tacho' at 10.3 Hz are found within 1e-3 sample periods of k / f."""
+    fs, f = 1000.0, 10.3
+    t = np.arange(2000) / fs
+    times = tsa.tacho_pulse_times(np.sin(2 * np.pi * f * t), fs, threshold=0.0)
+    expected = np.arange(1, times.size + 1) / f
+    assert np.max(np.abs(times - expected)) < 1e-3 / fs * 10  # linear interpolation of a sine near zero
+
+
+def test_split_tsa_separates_regular_residual_difference():
+    """Order-domain split (Lebold 2000): with z = 16, N = 256 and components at orders 1 (shaft), 16, 32 (mesh),
+    15, 17 (first sidebands) and 7 (fault), residual = sidebands + order 7, difference = order 7,
+    regular = orders 1, 15, 16, 17, 32; tol 1e-12."""
+    th = 2 * np.pi * np.arange(256) / 256
+    shaft, mesh = 0.3 * np.cos(th), np.cos(16 * th) + 0.5 * np.cos(32 * th)
+    sb, fault = 0.2 * np.cos(15 * th) + 0.1 * np.sin(17 * th), 0.25 * np.cos(7 * th)
+    parts = tsa.split_tsa(2.0 + shaft + mesh + sb + fault, 16, n_shaft_orders=2, n_sideband_orders=1)
+    np.testing.assert_allclose(parts.residual, sb + fault, atol=1e-12)
+    np.testing.assert_allclose(parts.difference, fault, atol=1e-12)
+    np.testing.assert_allclose(parts.regular, shaft + mesh + sb, atol=1e-12)
+
+
+def test_bad_tracks_and_short_records_raise():
+    """A shaft turning backwards, or a record shorter than one revolution, is an InputError."""
+    with pytest.raises(InputError):
+        tsa.AngleTrack(np.array([0.0, 1.0]), np.array([1.0, 0.0]))
+    x = np.zeros(100)
+    with pytest.raises(InputError):
+        tsa.angular_resample(x, 1000.0, tsa.angle_track_constant_speed(100, 1000.0, 5.0), samples_per_rev=64)
