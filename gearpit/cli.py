@@ -19,6 +19,13 @@ from gearpit.errors import GearpitError
 COMMAND_MODULES = [
     "gearpit.commands.demo",
     "gearpit.commands.stiffness",
+    "gearpit.commands.simulate",
+    "gearpit.commands.generate",
+    "gearpit.commands.dataset",
+    "gearpit.commands.rank_features",
+    "gearpit.commands.train",
+    "gearpit.commands.evaluate",
+    "gearpit.commands.predict",
 ]
 
 

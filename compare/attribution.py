@@ -1,0 +1,433 @@
+"""Which effect is missing: fit every registered effect absent from the model, rank, flag the unexplained.
+
+For every registered effect that is not in the model (and is not part of the
+measurement chain, :data:`compare.fitspace.CHAIN_EFFECTS`), its few
+parameters (:mod:`compare.fitspace`) are fitted to the measurement by
+minimising the total error of :mod:`compare.error` within their bounds:
+
+1. round A - a coarse grid of the first parameter (or the frequencies the
+   measurement points to, for a parameter in Hz), the second at its default
+   (at three values when the first is a frequency);
+2. round B - a grid of the second parameter at the best first one, or a finer
+   bracket around the best for a one-parameter effect; the string option's
+   other values at the best point;
+3. round C - steps of a third of the grid spacing around the best in every
+   parameter;
+4. round D - the minimum of a quadratic surrogate of ``E^2`` fitted to the
+   points near the best (:func:`scipy.optimize.minimize`, bounded), evaluated.
+
+Every round is one :func:`datagen.simulate.simulate` call for all effects
+together (two when some effects need time stepping: those are simulated on a
+shorter window with a short start-up, and compared with a baseline simulated
+the same way, so their error reduction is like for like).
+
+Uncertainty: with ``E_min`` the best total error and ``N`` Kish's effective
+number of residuals (:func:`compare.error.effective_count`), the residuals are
+treated as Gaussian with variance ``E_min^2``, so ``N E^2 / E_min^2`` is a
+chi-square; the 1-sigma interval of a parameter is where the profile of the
+quadratic surrogate rises by 1: ``sigma_u^2 = (E_min^2 / N) (H^-1)_jj`` with
+``H`` the Hessian of ``E^2`` in the search coordinate. A non-positive
+curvature means the parameter is not identifiable from these views
+(``sigma = inf``).
+
+An effect is *claimed* when it lowers the total error by at least
+``claim_reduction`` (fraction). A disagreement of the baseline larger than
+``unexplained_db`` that no claimed effect halves is reported as unexplained:
+nothing in the registry accounts for it, and no attribution is forced.
+
+References
+----------
+Press, W. H. et al. (2007). Numerical Recipes, 3rd ed., sec. 15.6 (confidence limits from
+    delta chi-square, profile of the merit function).
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import minimize
+
+from compare.comparison import Reference, evaluate, prepare_reference, simulate_model
+from compare.error import effective_count
+from compare.fitspace import CHAIN_EFFECTS, FitSpace, fit_space, frequency_seeds, grid
+from gearpit.errors import GearpitError, require
+
+
+@dataclass(frozen=True)
+class AttributionSettings:
+    """Knobs of :func:`attribute` (defaults used everywhere unless said otherwise)."""
+
+    claim_reduction: float = 0.30
+    unexplained_db: float = 6.0
+    transient_window_s: float = 0.5
+    transient_startup_s: float = 0.15
+    transient_omega_dt: float = 1.0
+    seed: int = 0
+
+
+@dataclass
+class Trial:
+    values: dict
+    choice: object
+    u: np.ndarray
+    error_db: float = math.inf
+    residual_db: np.ndarray | None = None
+    view_error_db: dict = field(default_factory=dict)
+    note: str = ""
+
+
+@dataclass
+class CandidateResult:
+    """The fit of one candidate effect."""
+
+    effect: str
+    signature: str
+    params: dict
+    sigma: dict
+    error_db: float
+    baseline_error_db: float
+    view_error_db: dict
+    window: str
+    n_evaluations: int
+    explains: list = field(default_factory=list)
+    claimed: bool = False
+    status: str = "fitted"
+
+    @property
+    def reduction(self) -> float:
+        if not (math.isfinite(self.error_db) and self.baseline_error_db > 0):
+            return 0.0
+        return 1.0 - self.error_db / self.baseline_error_db
+
+    def to_dict(self) -> dict:
+        return {"effect": self.effect, "signature": self.signature, "params": self.params,
+                "sigma": {k: (v if math.isfinite(v) else None) for k, v in self.sigma.items()},
+                "error_db": self.error_db if math.isfinite(self.error_db) else None,
+                "baseline_error_db": self.baseline_error_db, "reduction": self.reduction,
+                "view_error_db": self.view_error_db, "window": self.window, "n_evaluations": self.n_evaluations,
+                "explains": self.explains, "claimed": self.claimed, "status": self.status}
+
+
+@dataclass
+class Attribution:
+    candidates: list            # CandidateResult, best first
+    unexplained: list           # Disagreement dicts no claimed effect explains
+    elapsed_s: float
+    n_simulations: int
+    group_seconds: dict = field(default_factory=dict)
+
+    @property
+    def claimed(self) -> list:
+        return [c for c in self.candidates if c.claimed]
+
+    def to_dict(self) -> dict:
+        return {"candidates": [c.to_dict() for c in self.candidates], "unexplained": self.unexplained,
+                "claimed": [c.effect for c in self.claimed], "elapsed_s": self.elapsed_s,
+                "n_simulations": self.n_simulations, "group_seconds": self.group_seconds}
+
+
+class _Search:
+    def __init__(self, cls, space: FitSpace):
+        self.cls = cls
+        self.space = space
+        self.trials: list[Trial] = []
+        self.choice = cls().params().get(space.choice[0]) if space.choice else None
+        self.default_choice = self.choice
+
+    def point(self, values: dict, choice=None) -> Trial:
+        choice = self.choice if choice is None else choice
+        u = np.array([p.to_u(values[p.name]) for p in self.space.params])
+        return Trial(values=dict(values), choice=choice, u=u)
+
+    def defaults(self) -> dict:
+        return {p.name: p.default for p in self.space.params}
+
+    @property
+    def best(self) -> Trial | None:
+        done = [t for t in self.trials if math.isfinite(t.error_db)]
+        return min(done, key=lambda t: t.error_db) if done else None
+
+    def build(self, t: Trial):
+        kw = dict(t.values)
+        if self.space.choice:
+            kw[self.space.choice[0]] = t.choice
+        return self.cls(**kw)
+
+    def seen(self, t: Trial) -> bool:
+        return any(np.allclose(t.u, s.u, atol=1e-4) and t.choice == s.choice for s in self.trials)
+
+
+def _round_a(s: _Search, ref_residual, ref) -> list[Trial]:
+    ps = s.space.params
+    if not ps:
+        return [s.point({})]
+    p0 = ps[0]
+    first = frequency_seeds(ref, ref_residual, p0) if p0.unit == "Hz" else grid(p0)
+    second = [None]
+    if len(ps) > 1:
+        second = list(grid(ps[1], 3)) if p0.unit == "Hz" else [ps[1].default]
+    out = []
+    for v0 in first:
+        for v1 in second:
+            vals = s.defaults()
+            vals[p0.name] = float(v0)
+            if v1 is not None:
+                vals[ps[1].name] = float(v1)
+            out.append(s.point(vals))
+    return out
+
+
+def _round_b(s: _Search) -> list[Trial]:
+    ps, best = s.space.params, s.best
+    if best is None:
+        return []
+    out = []
+    if len(ps) >= 2:
+        for v in grid(ps[1], 5):
+            out.append(s.point({**best.values, ps[1].name: float(v)}))
+    elif len(ps) == 1:
+        step = 1.0 / (2 * 6)
+        for du in (-2 * step, -step, step, 2 * step):
+            out.append(s.point({ps[0].name: float(ps[0].from_u(best.u[0] + du))}))
+    if s.space.choice:
+        out += [s.point(best.values, c) for c in s.space.choice[1] if c != best.choice]
+    return [t for t in out if not s.seen(t)]
+
+
+def _round_c(s: _Search) -> list[Trial]:
+    ps, best = s.space.params, s.best
+    if best is None or not ps:
+        return []
+    s.choice = best.choice
+    out = []
+    for j, p in enumerate(ps):
+        step = (0.02 if p.unit == "Hz" else 1.0 / 18) if j == 0 else 1.0 / 15
+        for du in (-step, step):
+            u = best.u.copy()
+            u[j] = np.clip(u[j] + du, 0, 1)
+            out.append(s.point({q.name: float(q.from_u(u[i])) for i, q in enumerate(ps)}, best.choice))
+    return [t for t in out if not s.seen(t)]
+
+
+def _quadratic(s: _Search):
+    """Fit E^2 = c + g.u + 1/2 u'Hu on the points near the best; returns (u_min, H, E2_min) or None."""
+    best = s.best
+    pts = [t for t in s.trials if math.isfinite(t.error_db) and t.choice == best.choice]
+    n = len(s.space.params)
+    need = 1 + n + n * (n + 1) // 2
+    if n == 0 or len(pts) < need:
+        return None
+    pts.sort(key=lambda t: float(np.sum((t.u - best.u) ** 2)))
+    pts = pts[:max(need + 2, 2 * need)]
+    U = np.array([t.u - best.u for t in pts])
+    y = np.array([t.error_db ** 2 for t in pts])
+    cols = [np.ones(len(pts))] + [U[:, j] for j in range(n)]
+    pairs = [(i, j) for i in range(n) for j in range(i, n)]
+    cols += [U[:, i] * U[:, j] * (0.5 if i == j else 1.0) for i, j in pairs]
+    A = np.column_stack(cols)
+    coef, *_ = np.linalg.lstsq(A, y, rcond=None)
+    g = coef[1:1 + n]
+    H = np.zeros((n, n))
+    for (i, j), c in zip(pairs, coef[1 + n:]):
+        H[i, j] = H[j, i] = c
+
+    def f(u):
+        return coef[0] + g @ u + 0.5 * u @ H @ u
+
+    bounds = [(-bu, 1 - bu) for bu in best.u]
+    res = minimize(f, np.zeros(n), jac=lambda u: g + H @ u, bounds=bounds, method="L-BFGS-B")
+    return best.u + res.x, H, max(float(res.fun), 1e-12)
+
+
+def _round_d(s: _Search) -> list[Trial]:
+    q = _quadratic(s)
+    if q is None:
+        return []
+    u = q[0]
+    t = s.point({p.name: float(p.from_u(u[j])) for j, p in enumerate(s.space.params)}, s.best.choice)
+    return [] if s.seen(t) else [t]
+
+
+def _run(trials: list[tuple[_Search, Trial]], ref: Reference, model, settings, transient: bool, counter: list,
+         with_baseline: bool = False):
+    """Simulate and evaluate ``trials`` in one batch; with ``with_baseline`` the model itself rides along
+    and its :class:`Residuals` are returned."""
+    built = []
+    for s, t in trials:
+        try:
+            e = s.build(t)
+            if not transient and t.choice != s.default_choice and _period_s(ref, model, e) > len(ref.x) / ref.fs_hz:
+                t.note = "record period longer than the measurement: not tried"
+                s.trials.append(t)
+                continue
+            built.append((s, t, e))
+        except GearpitError:
+            t.error_db = math.inf
+            s.trials.append(t)
+    extras = ([()] if with_baseline else []) + [(e,) for _, _, e in built]
+    if not extras:
+        return None
+    solver = ({"omega_dt": settings.transient_omega_dt, "transient_s": settings.transient_startup_s, "method": "transient"}
+              if transient else {"method": "periodic"})
+    dur = ref.model_duration_s()
+    try:
+        ys = simulate_model(ref, model, extra_effects_list=extras, seed=settings.seed, duration_s=dur, solver=solver)
+    except (GearpitError, FloatingPointError, np.linalg.LinAlgError):
+        ys = []
+        for extra in extras:
+            try:
+                ys += simulate_model(ref, model, extra_effects_list=[extra], seed=settings.seed, duration_s=dur,
+                                     solver=solver)
+            except (GearpitError, FloatingPointError, np.linalg.LinAlgError):
+                ys.append(None)
+    counter[0] += len(extras)
+    base = None
+    if with_baseline:
+        require(ys[0] is not None, "model", model.describe(), "a model that simulates at this operating point")
+        base = evaluate(ref, ys[0], ref.fs_hz, seed=settings.seed).residuals
+        ys = ys[1:]
+    for (s, t, _), y in zip(built, ys):
+        if y is not None and np.all(np.isfinite(y)):
+            ev = evaluate(ref, y, ref.fs_hz, seed=settings.seed)
+            t.error_db = ev.residuals.total_db
+            t.residual_db = ev.residuals.residual_db
+            t.view_error_db = ev.residuals.view_error_db
+        s.trials.append(t)
+    return base
+
+
+def _period_s(ref: Reference, model, effect) -> float:
+    """Steady-state record period (s) of the model plus ``effect`` (e.g. the hunting period when both gears
+    carry errors); trying a string option whose period exceeds the measurement would cost more than it tells."""
+    from datagen.simulate import prepare
+
+    m = ref.measurement
+    case = model.case(m.pair, speed_rpm=ref.speed.speed_rpm, torque_nm=m.torque_nm, duration_s=ref.model_duration_s(),
+                      fs_hz=m.fs_hz, extra_effects=(effect,))
+    return float(prepare(case).period_s)
+
+
+def _search_group(names_: list, ref: Reference, model, settings, transient: bool, disagreements, n_eff: float,
+                  seed_residual: np.ndarray):
+    """Fit the effects ``names_`` (all periodic or all time-stepped); returns (results, n_simulations, seconds).
+
+    ``seed_residual`` (the current model's residuals on ``ref``) points the frequency parameters.
+    """
+    from datagen.effects import get
+
+    t0 = time.perf_counter()
+    searches = [_Search(get(n), fit_space(get(n))) for n in names_]
+    counter = [0]
+    seed_ref = ref
+    if transient:
+        fr_w = ref.speed.fr_pinion_hz * ref.plan.z_pinion / ref.plan.z_wheel
+        dur = min(len(ref.x) / ref.fs_hz, max(settings.transient_window_s, 3.0 / fr_w))
+        ref = prepare_reference(ref.measurement, duration_s=dur, speed=ref.speed)
+    first = [(s, t) for s in searches for t in _round_a(s, seed_residual, seed_ref)]
+    # the current model is simulated in the first batch, exactly like the candidates (seed, solver, window)
+    base = _run(first, ref, model, settings, transient, counter, with_baseline=True)
+    rounds = [_round_b, _round_d] if transient else [_round_b, _round_c, _round_d]  # time stepping is the cost
+    for make in rounds:
+        _run([(s, t) for s in searches for t in make(s)], ref, model, settings, transient, counter)
+    results = [_result(s, base, ref, n_eff, disagreements) for s in searches]
+    return results, counter[0], time.perf_counter() - t0
+
+
+def attribute(ref: Reference, model, baseline_residual: np.ndarray, *, candidates=None,
+              settings: AttributionSettings | None = None, disagreements=(), parallel: bool = True) -> Attribution:
+    """Fit, rank and flag (module docstring).
+
+    Parameters
+    ----------
+    ref : Reference
+        The measurement side (:func:`compare.comparison.prepare_reference`).
+    model : ComparisonModel
+        The current model; its effects are not candidates.
+    baseline_residual : ndarray
+        The current model's residuals on ``ref`` (from :func:`compare.comparison.compare`).
+    candidates : sequence of str, optional
+        Restrict to these registered effect names (default: every registered effect not in the model).
+    disagreements : sequence of Disagreement
+        The current model's ranked disagreements (for the explained / unexplained bookkeeping).
+    parallel : bool
+        Fit the time-stepped effects in a second process while this one fits the others (2 cores).
+    """
+    from datagen.effects import get, names
+
+    settings = settings or AttributionSettings()
+    t0 = time.perf_counter()
+    pool = [n for n in (candidates if candidates is not None else names())
+            if n not in model.effect_names and n not in CHAIN_EFFECTS]
+    transient = [n for n in pool if fit_space(get(n)).transient]
+    periodic = [n for n in pool if n not in transient]
+    n_eff = effective_count(ref.plan)
+    results, n_sims, seconds = [], 0, {}
+    future = None
+    args = (ref, model, settings)
+    tail = (list(disagreements), n_eff, np.asarray(baseline_residual))
+    if transient and periodic and parallel:
+        import concurrent.futures as cf
+        import multiprocessing as mp
+
+        executor = cf.ProcessPoolExecutor(max_workers=1, mp_context=mp.get_context("fork"))
+        future = executor.submit(_search_group, transient, *args, True, *tail)
+    elif transient:
+        r, n, seconds["time_stepped"] = _search_group(transient, *args, True, *tail)
+        results += r
+        n_sims += n
+    if periodic:
+        r, n, seconds["periodic"] = _search_group(periodic, *args, False, *tail)
+        results += r
+        n_sims += n
+    if future is not None:
+        r, n, seconds["time_stepped"] = future.result()
+        executor.shutdown()
+        results += r
+        n_sims += n
+    results.sort(key=lambda c: -c.reduction)
+    for c in results:
+        c.claimed = c.reduction >= settings.claim_reduction and c.status == "fitted"
+    explained = {k for c in results if c.claimed for k in c.explains}
+    unexplained = [d.to_dict() for d in disagreements
+                   if abs(d.residual_db) >= settings.unexplained_db and d.key not in explained]
+    return Attribution(candidates=results, unexplained=unexplained, elapsed_s=time.perf_counter() - t0,
+                       n_simulations=n_sims, group_seconds=seconds)
+
+
+def _result(s: _Search, base, ref: Reference, n_eff: float, disagreements) -> CandidateResult:
+    best = s.best
+    sig = s.cls.signature
+    if best is None:
+        return CandidateResult(s.space.effect, sig, {}, {}, math.inf, base.total_db, {}, _window(ref), len(s.trials),
+                               status="failed")
+    params = dict(best.values)
+    if s.space.choice:
+        params[s.space.choice[0]] = best.choice
+    sigma = {}
+    q = _quadratic(s)
+    for j, p in enumerate(s.space.params):
+        su = math.inf
+        if q is not None:
+            _, H, e2 = q
+            try:
+                hinv = np.linalg.inv(H)
+                if np.all(np.linalg.eigvalsh(H) > 0) and hinv[j, j] > 0:
+                    su = math.sqrt(best.error_db ** 2 / n_eff * hinv[j, j])
+            except np.linalg.LinAlgError:
+                pass
+        sigma[p.name] = p.sigma_from_u(params[p.name], su)
+    keys = ref.plan.keys
+    explains = []
+    for d in disagreements:
+        if d.key in keys:
+            r = best.residual_db[keys.index(d.key)]
+            if abs(r) <= 0.5 * abs(d.residual_db):
+                explains.append(d.key)
+    return CandidateResult(s.space.effect, sig, params, sigma, best.error_db, base.total_db, best.view_error_db,
+                           _window(ref), len(s.trials), explains)
+
+
+def _window(ref: Reference) -> str:
+    return f"{len(ref.x) / ref.fs_hz:.3g} s"

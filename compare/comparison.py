@@ -1,0 +1,163 @@
+"""One comparison end to end: measurement + model -> residuals, errors, disagreements.
+
+Steps (each in its own module):
+
+1. the measured speed is refined (:mod:`compare.speed`) and the plan of
+   locations is built on the measurement (:mod:`compare.views`);
+2. the model is simulated at the refined speed, the sidecar's torque, the
+   measurement's sampling rate and length (:mod:`compare.model`,
+   :func:`datagen.simulate.simulate`) and its sensor channel analysed on the
+   same plan, with a constant-speed angle track at the refined speed;
+3. the measurement chain is matched, not assumed: a first gain estimate from
+   the visible lines, then white noise is added to the model record so that its
+   floor between the orders equals the measured one (per-bin power ``P`` of
+   white noise of variance ``s2`` in the order spectrum is ``6 s2 df / fs``, so
+   ``s2 = (P_meas / g^2 - P_model) fs / (6 df)``, none when the model's floor is
+   already as high); then the gain is fitted again on all views
+   (:mod:`compare.error`);
+4. residuals, the error per view and in total, and the ranked disagreements
+   (:mod:`compare.disagreements`).
+
+The noise is drawn from ``seed`` (same seed, same bytes) and, in attribution,
+is the same draw for every candidate (common random numbers).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from compare.error import Residuals, fit_gain_db, residuals
+from compare.measurement import Measurement
+from compare.speed import SpeedEstimate, constant_track, refine_speed
+from compare.views import Plan, SignalViews, analyse, make_plan, pinion_lines
+from gearpit.errors import require
+
+#: extra pinion revolutions simulated beyond the measurement, so the model never has fewer
+EXTRA_REVS = 1.5
+
+
+@dataclass(frozen=True, eq=False)
+class Reference:
+    """Everything about the measurement that a comparison holds fixed."""
+
+    measurement: Measurement
+    x: np.ndarray
+    speed: SpeedEstimate
+    plan: Plan
+    views: SignalViews
+
+    @property
+    def fs_hz(self) -> float:
+        return self.measurement.fs_hz
+
+    @property
+    def noise_floor(self) -> float:
+        """Per-bin power of the measured floor between the orders (measurement units squared)."""
+        return float(self.views.curves["noise_floor"])
+
+    def model_duration_s(self) -> float:
+        return len(self.x) / self.fs_hz + EXTRA_REVS / self.speed.fr_pinion_hz
+
+
+def prepare_reference(measurement: Measurement, *, duration_s: float | None = None,
+                      speed: SpeedEstimate | None = None) -> Reference:
+    """Refine the speed, build the plan and analyse the measurement (optionally its first ``duration_s``)."""
+    x = measurement.signal
+    if speed is None:
+        speed = refine_speed(measurement)
+    if duration_s is not None:
+        n = min(len(x), int(round(duration_s * measurement.fs_hz)))
+        x = x[:n]
+    track = speed.track if duration_s is None else _crop_track(speed, len(x), measurement.fs_hz)
+    plan = make_plan(x, measurement.fs_hz, track, measurement.pair)
+    views = analyse(x, measurement.fs_hz, track, plan, keep_curves=True)
+    return Reference(measurement=measurement, x=np.asarray(x, float), speed=speed, plan=plan, views=views)
+
+
+def _crop_track(speed: SpeedEstimate, n: int, fs_hz: float):
+    from features.tsa import AngleTrack
+
+    t_end = (n - 1) / fs_hz
+    t = speed.track.time_s
+    grid = np.linspace(0.0, t_end, 129)
+    return AngleTrack(grid, np.interp(grid, t, speed.track.angle_rad))
+
+
+@dataclass(frozen=True, eq=False)
+class Evaluation:
+    """A model record compared with the reference."""
+
+    views: SignalViews
+    residuals: Residuals
+    noise_added_rms: float
+    x: np.ndarray = field(repr=False, default=None)
+
+    @property
+    def total_db(self) -> float:
+        return self.residuals.total_db
+
+
+def evaluate(ref: Reference, y: np.ndarray, fs_hz: float, *, seed: int = 0, keep_curves: bool = False,
+             keep_signal: bool = False) -> Evaluation:
+    """Compare a model record ``y`` (at the refined speed, from t = 0) with the reference (module docstring)."""
+    require(abs(fs_hz - ref.fs_hz) <= 1e-6 * ref.fs_hz, "model fs_hz", fs_hz, f"the measurement's {ref.fs_hz} Hz")
+    y = np.asarray(y, float)
+    plan = ref.plan
+    track = constant_track(len(y), fs_hz, ref.speed.fr_pinion_hz)
+    v0 = pinion_lines(y, fs_hz, track, plan)
+    ok = np.isfinite(v0.levels)
+    g0 = fit_gain_db(SignalViews(ref.views.levels[ok], ref.views.floors[ok]), SignalViews(v0.levels[ok], v0.floors[ok]),
+                     plan, mask=ok)
+    p_model = float(v0.curves["noise_floor"])
+    p_target = ref.noise_floor / 10 ** (g0 / 10)
+    s2 = max(0.0, p_target - p_model) * fs_hz / (6.0 * plan.bin_hz)
+    if s2 > 0:
+        rng = np.random.default_rng(seed)
+        y = y + np.sqrt(s2) * rng.standard_normal(y.size)
+    v = analyse(y, fs_hz, track, plan, keep_curves=keep_curves)
+    res = residuals(ref.views, v, plan)
+    return Evaluation(views=v, residuals=res, noise_added_rms=float(np.sqrt(s2)), x=y if keep_signal else None)
+
+
+def simulate_model(ref: Reference, model, *, extra_effects_list=((),), seed: int = 0, duration_s: float | None = None,
+                   solver: dict | None = None) -> list:
+    """Simulate ``model`` (plus each entry of ``extra_effects_list``) at the reference operating point, one batch."""
+    from datagen.simulate import simulate
+
+    m = ref.measurement
+    dur = ref.model_duration_s() if duration_s is None else duration_s
+    cases = [model.case(m.pair, speed_rpm=ref.speed.speed_rpm, torque_nm=m.torque_nm, duration_s=dur,
+                        fs_hz=m.fs_hz, seed=seed, extra_effects=tuple(extra), solver=solver)
+             for extra in extra_effects_list]
+    signals = simulate(cases)
+    for s in signals:
+        require(model.sensor in s.channels, "model.sensor", model.sensor,
+                "a simulated channel: " + ", ".join(sorted(k for k in s.channels if not k.startswith("_"))))
+    return [s.channels[model.sensor] for s in signals]
+
+
+@dataclass(frozen=True, eq=False)
+class Comparison:
+    """Result of :func:`compare`: the reference, the model's evaluation and the ranked disagreements."""
+
+    reference: Reference
+    model: object
+    evaluation: Evaluation
+    disagreements: list
+    model_signal: np.ndarray = field(repr=False, default=None)
+
+    @property
+    def error_db(self) -> dict:
+        return {**self.evaluation.residuals.view_error_db, "total": self.evaluation.residuals.total_db}
+
+
+def compare(measurement: Measurement, model, *, seed: int = 0, reference: Reference | None = None) -> Comparison:
+    """Compare ``model`` (a :class:`compare.model.ComparisonModel`) with ``measurement``."""
+    from compare.disagreements import rank_disagreements
+
+    ref = reference if reference is not None else prepare_reference(measurement)
+    (y,) = simulate_model(ref, model, seed=seed)
+    ev = evaluate(ref, y, measurement.fs_hz, seed=seed, keep_curves=True, keep_signal=True)
+    dis = rank_disagreements(ref, ev)
+    return Comparison(reference=ref, model=model, evaluation=ev, disagreements=dis, model_signal=ev.x)

@@ -1,0 +1,350 @@
+"""Readers of measurement files: generic CSV/TXT, NPY, NPZ, WAV, MAT (v5 and v7.3) and three public layouts.
+
+Every reader returns a :class:`RawRecord`: channel names, a (n_samples, n_channels)
+float array and, when the file says so, the sampling rate and what its name tells
+about the operating point. Validation (NaN, length, fs) is done once, afterwards,
+by :func:`compare.measurement.load_measurement`.
+
+Generic layouts
+---------------
+- CSV/TXT: optional header line (non-numeric first line), delimiter ``,`` ``;``
+  tab or whitespace; a column named ``time``, ``time_s``, ``t`` (or the sidecar's
+  ``time_column``) is the time axis: fs = 1/median(dt), refused unless uniform to 1 %.
+- NPY: a 1-D array (one channel) or 2-D (the longer axis is time).
+- NPZ: one 2-D array, or several equal-length 1-D arrays (one channel each, named by
+  key); a scalar ``fs_hz`` or ``fs`` entry gives the sampling rate.
+- WAV: :func:`scipy.io.wavfile.read` (integer samples scaled to [-1, 1)).
+- MAT: :func:`scipy.io.loadmat`; v7.3 files (HDF5) through ``h5py``. Numeric
+  variables as in NPZ; a scalar ``fs``, ``fs_hz`` or ``Fs`` gives the sampling rate.
+
+Public layouts (``format`` in the sidecar, or recognised by the file name)
+-------------------------------------------------------------------------
+- ``mcc5_thu``: MCC5-THU gearbox (Mendeley doi:10.17632/p92gj2732w): CSV with header
+  ``speed,torque,motor_vibration_x,...,gearbox_vibration_z``, fs 12.8 kHz.
+- ``phm2023``: PHM Society 2023 gearbox challenge: ``V<rpm>_<torque>N_<run>.txt``,
+  four whitespace-separated columns (three accelerations, tachometer), fs 20480 Hz
+  (as used by participants; not in an official document we have).
+- ``seu``: Southeast University gearset (``gearbox/gearset/<Label>_<speed Hz>_<load V>.csv``):
+  up to ~16 free-text header lines, then 8 columns (motor vibration, planetary
+  gearbox x/y/z, motor torque, parallel gearbox x/y/z), comma or tab separated;
+  fs not documented by the authors (the sidecar must give it).
+
+References
+----------
+../shared/data/spectraquest_gfd/README.md, section "Why this dataset" (the three layouts).
+"""
+from __future__ import annotations
+
+import csv
+import io
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from gearpit.errors import InputError, require
+
+#: accepted values of the sidecar's ``format``
+FORMATS = ("auto", "csv", "npy", "npz", "wav", "mat", "mcc5_thu", "phm2023", "seu")
+
+TIME_COLUMNS = ("time", "time_s", "t", "times", "time_sec")
+FS_KEYS = ("fs_hz", "fs", "Fs", "FS", "sample_rate", "sampling_rate")
+
+MCC5_COLUMNS = ("speed", "torque", "motor_vibration_x", "motor_vibration_y", "motor_vibration_z",
+                "gearbox_vibration_x", "gearbox_vibration_y", "gearbox_vibration_z")
+PHM2023_COLUMNS = ("acc_1", "acc_2", "acc_3", "tacho")
+SEU_COLUMNS = ("motor_vibration", "planetary_x", "planetary_y", "planetary_z", "motor_torque",
+               "parallel_x", "parallel_y", "parallel_z")
+
+_PHM_NAME = re.compile(r"^V(?P<rpm>\d+(?:\.\d+)?)_(?P<torque>\d+(?:\.\d+)?)N_(?P<run>\d+)\.txt$", re.IGNORECASE)
+_SEU_NAME = re.compile(r"^(?P<label>health|chipped|miss|root|surface)_(?P<hz>\d+)_(?P<load>\d+)\.csv$",
+                       re.IGNORECASE)
+
+
+@dataclass(frozen=True, eq=False)
+class RawRecord:
+    """What a file holds, before validation.
+
+    Attributes
+    ----------
+    names : tuple of str
+        Channel names (columns of ``data``).
+    data : ndarray (n_samples, n_channels)
+    fs_hz : float or None
+        Sampling rate found in the file (time column, WAV header, ``fs`` variable).
+    hints : dict
+        Operating-point defaults read from the file name or layout
+        (``speed_rpm``, ``torque_nm``, ``fault``, ``tacho``, ``sensor``, ``fs_hz``).
+    """
+
+    names: tuple
+    data: np.ndarray
+    fs_hz: float | None = None
+    hints: dict = field(default_factory=dict)
+
+
+def detect_format(path: Path) -> str:
+    """The layout of ``path`` from its name and extension (module docstring)."""
+    name = path.name
+    if _PHM_NAME.match(name):
+        return "phm2023"
+    if _SEU_NAME.match(name):
+        return "seu"
+    ext = path.suffix.lower()
+    if ext in (".csv", ".txt", ".tsv", ".dat"):
+        with open(path, "r", encoding="utf-8", errors="replace") as fh:
+            first = fh.readline().strip().lower()
+        if "gearbox_vibration" in first:
+            return "mcc5_thu"
+        return "csv"
+    table = {".npy": "npy", ".npz": "npz", ".wav": "wav", ".mat": "mat"}
+    if ext not in table:
+        raise InputError("measurement", str(path), "a .csv/.txt/.tsv, .npy, .npz, .wav or .mat file")
+    return table[ext]
+
+
+def read_record(path: str | Path, fmt: str = "auto", *, time_column: str | None = None,
+                variable: str | None = None) -> RawRecord:
+    """Read ``path`` in layout ``fmt`` (one of :data:`FORMATS`)."""
+    p = Path(path)
+    require(fmt in FORMATS, "format", fmt, "one of: " + ", ".join(FORMATS))
+    require(p.is_file(), "measurement", str(p), "an existing file")
+    if fmt == "auto":
+        fmt = detect_format(p)
+    if fmt == "csv":
+        return read_delimited(p, time_column=time_column)
+    if fmt == "npy":
+        return _from_array(np.load(p, allow_pickle=False), None, str(p))
+    if fmt == "npz":
+        with np.load(p, allow_pickle=False) as z:
+            return _from_mapping({k: z[k] for k in z.files}, variable, str(p))
+    if fmt == "wav":
+        return read_wav(p)
+    if fmt == "mat":
+        return read_mat(p, variable)
+    if fmt == "mcc5_thu":
+        rec = read_delimited(p, time_column=time_column)
+        return RawRecord(rec.names, rec.data, rec.fs_hz,
+                         {"fs_hz": 12800.0, "tacho": "speed", "sensor": "gearbox_vibration_x",
+                          **_mcc5_name_hints(p.name)})
+    if fmt == "phm2023":
+        return read_phm2023(p)
+    return read_seu(p)
+
+
+# ---------------------------------------------------------------------- text
+def _is_number(s: str) -> bool:
+    try:
+        float(s)
+        return True
+    except ValueError:
+        return False
+
+
+def _split(line: str, delim: str | None) -> list[str]:
+    parts = line.split(delim) if delim else line.split()
+    return [s.strip() for s in parts]
+
+
+def _sniff_delimiter(line: str) -> str | None:
+    for d in (",", ";", "\t"):
+        if d in line:
+            return d
+    return None  # whitespace
+
+
+def _parse_rows(lines: list[str], delim: str | None, where: str, first_line_no: int) -> np.ndarray:
+    rows = []
+    width = None
+    for i, line in enumerate(lines):
+        if not line.strip():
+            continue
+        cells = [c for c in _split(line, delim)]
+        while cells and cells[-1] == "":  # trailing separator
+            cells.pop()
+        if width is None:
+            width = len(cells)
+        if len(cells) != width:
+            raise InputError(f"{where}: line {first_line_no + i}", len(cells),
+                             f"{width} columns, as in the first data line")
+        try:
+            rows.append([float(c) if c.lower() not in ("nan", "") else np.nan for c in cells])
+        except ValueError:
+            raise InputError(f"{where}: line {first_line_no + i}", line.strip()[:60], "numbers only") from None
+    require(rows, where, "no data rows", "at least one row of numbers")
+    return np.asarray(rows, dtype=float)
+
+
+def read_delimited(path: Path, *, time_column: str | None = None, skip_text_lines: bool = False) -> RawRecord:
+    """Generic CSV/TXT (module docstring); ``skip_text_lines`` drops leading non-numeric lines."""
+    text = path.read_text(encoding="utf-8", errors="replace")
+    lines = text.splitlines()
+    start = 0
+    while start < len(lines) and not lines[start].strip():
+        start += 1
+    require(start < len(lines), str(path), "empty file", "a file with rows of numbers")
+    header = None
+    if skip_text_lines:
+        while start < len(lines):
+            cells = _split(lines[start], _sniff_delimiter(lines[start]))
+            cells = [c for c in cells if c]
+            if cells and all(_is_number(c) for c in cells) and len(cells) >= 2:
+                break
+            start += 1
+        require(start < len(lines), str(path), "no numeric rows", "rows of numbers after the header text")
+    else:
+        delim = _sniff_delimiter(lines[start])
+        first = [c for c in _split(lines[start], delim)]
+        if not all(_is_number(c) or c.lower() == "nan" for c in first if c):
+            header = [c.strip().strip('"') for c in next(csv.reader(io.StringIO(lines[start]),
+                                                                     delimiter=delim or " ", skipinitialspace=True))]
+            header = [h for h in header if h != ""]
+            start += 1
+    delim = _sniff_delimiter(lines[start]) if start < len(lines) else None
+    data = _parse_rows(lines[start:], delim, str(path), start + 1)
+    if header is not None:
+        require(len(header) == data.shape[1], f"{path}: header", len(header),
+                f"{data.shape[1]} names, one per data column")
+        names = tuple(header)
+    else:
+        names = tuple(f"ch{i}" for i in range(data.shape[1]))
+    fs = None
+    lower = [n.lower() for n in names]
+    tcol = None
+    if time_column is not None:
+        require(time_column in names, "time_column", time_column, "a column name: " + ", ".join(names))
+        tcol = names.index(time_column)
+    else:
+        tcol = next((i for i, n in enumerate(lower) if n in TIME_COLUMNS), None)
+    if tcol is not None:
+        t = data[:, tcol]
+        require(t.size >= 3 and bool(np.all(np.isfinite(t))), f"{path}: column {names[tcol]}", "non-finite",
+                "finite times")
+        dt = np.diff(t)
+        med = float(np.median(dt))
+        require(med > 0 and float(np.max(np.abs(dt - med))) <= 0.01 * med, f"{path}: column {names[tcol]}",
+                "non-uniform or decreasing times", "uniform sampling (every step within 1 % of the median)")
+        fs = 1.0 / med
+        data = np.delete(data, tcol, axis=1)
+        names = names[:tcol] + names[tcol + 1:]
+    return RawRecord(names, data, fs)
+
+
+def _mcc5_name_hints(name: str) -> dict:
+    hints: dict = {}
+    m = re.search(r"(\d+(?:\.\d+)?)Nm-(\d+(?:\.\d+)?)rpm", name)
+    if m:
+        hints.update(torque_nm=float(m.group(1)), speed_rpm=float(m.group(2)))
+    m = re.match(r"^(health|gear_pitting_[LMH]|gear_wear_[LMH]|miss_teeth|teeth_crack_[LMH]|teeth_break_[LMH])",
+                 name)
+    if m:
+        hints["fault"] = m.group(1)
+    return hints
+
+
+def read_phm2023(path: Path) -> RawRecord:
+    """PHM 2023 gearbox layout (module docstring); speed and torque from the file name."""
+    rec = read_delimited(path)
+    require(rec.data.shape[1] == 4, f"{path}: columns", rec.data.shape[1], "4 (three accelerations, tachometer)")
+    hints: dict = {"fs_hz": 20480.0, "tacho": "tacho", "sensor": "acc_1"}
+    m = _PHM_NAME.match(path.name)
+    if m:
+        hints.update(speed_rpm=float(m.group("rpm")), torque_nm=float(m.group("torque")))
+    level = re.search(r"Pitting_degradation_level_(\d+)", str(path))
+    if level:
+        hints["fault"] = f"pitting_level_{level.group(1)}"
+    return RawRecord(PHM2023_COLUMNS, rec.data, None, hints)
+
+
+def read_seu(path: Path) -> RawRecord:
+    """SEU gearset layout (module docstring); shaft speed (Hz) and label from the file name."""
+    rec = read_delimited(path, skip_text_lines=True)
+    require(rec.data.shape[1] >= 8, f"{path}: columns", rec.data.shape[1], "8 (SEU gearset layout)")
+    hints: dict = {"sensor": "parallel_x"}
+    m = _SEU_NAME.match(path.name)
+    if m:
+        hints.update(speed_rpm=60.0 * float(m.group("hz")), fault=m.group("label").lower())
+    return RawRecord(SEU_COLUMNS, rec.data[:, :8], None, hints)
+
+
+# ---------------------------------------------------------------------- binary
+def _from_array(a: np.ndarray, names, where: str) -> RawRecord:
+    a = np.asarray(a)
+    require(a.dtype.kind in "fiu" and a.ndim in (1, 2) and a.size > 0, where, f"{a.dtype} {a.shape}",
+            "a numeric 1-D or 2-D array")
+    a = a.astype(float)
+    if a.ndim == 1:
+        a = a[:, None]
+    elif a.shape[0] < a.shape[1]:  # the longer axis is time
+        a = a.T
+    names = tuple(names) if names is not None else tuple(f"ch{i}" for i in range(a.shape[1]))
+    return RawRecord(names, a, None)
+
+
+def _scalar_fs(mapping: dict) -> float | None:
+    for k in FS_KEYS:
+        if k in mapping:
+            v = np.asarray(mapping[k]).astype(float).ravel()
+            require(v.size == 1, k, v.tolist()[:4], "a scalar sampling rate (Hz)")
+            return float(v[0])
+    return None
+
+
+def _from_mapping(mapping: dict, variable: str | None, where: str) -> RawRecord:
+    fs = _scalar_fs(mapping)
+    arrays = {k: np.asarray(v) for k, v in mapping.items()
+              if k not in FS_KEYS and not k.startswith("__") and np.asarray(v).dtype.kind in "fiu"
+              and np.asarray(v).size > 1}
+    if variable is not None:
+        require(variable in arrays, "variable", variable, "one of: " + ", ".join(sorted(arrays)))
+        rec = _from_array(arrays[variable], None, f"{where}:{variable}")
+        return RawRecord(rec.names, rec.data, fs)
+    require(arrays, where, "no numeric arrays", "at least one numeric array")
+    matrices = {k: v for k, v in arrays.items() if np.squeeze(v).ndim == 2}
+    if len(matrices) == 1 and len(arrays) == 1:
+        rec = _from_array(np.squeeze(next(iter(matrices.values()))), None, where)
+        return RawRecord(rec.names, rec.data, fs)
+    vectors = {k: np.squeeze(v) for k, v in arrays.items() if np.squeeze(v).ndim == 1}
+    require(vectors and not matrices, where, sorted(arrays),
+            "one 2-D array, or 1-D arrays of equal length (else name one with 'variable')")
+    lengths = {v.size for v in vectors.values()}
+    require(len(lengths) == 1, where, {k: v.size for k, v in vectors.items()}, "1-D arrays of equal length")
+    names = tuple(sorted(vectors))
+    return RawRecord(names, np.column_stack([vectors[k].astype(float) for k in names]), fs)
+
+
+def read_wav(path: Path) -> RawRecord:
+    """WAV file; integer PCM scaled to [-1, 1)."""
+    from scipy.io import wavfile
+
+    try:
+        fs, data = wavfile.read(path)
+    except ValueError as exc:
+        raise InputError("measurement", str(path), f"a readable WAV file ({exc})") from None
+    if data.dtype.kind in "iu":
+        info = np.iinfo(data.dtype)
+        data = (data.astype(float) - (info.max + info.min + 1) / 2) / ((info.max - info.min + 1) / 2)
+    rec = _from_array(data, None, str(path))
+    return RawRecord(rec.names, rec.data, float(fs))
+
+
+def read_mat(path: Path, variable: str | None = None) -> RawRecord:
+    """MATLAB file: v4-v7.2 through scipy, v7.3 (HDF5) through h5py."""
+    import scipy.io
+
+    try:
+        mapping = scipy.io.loadmat(path)
+    except NotImplementedError:  # v7.3
+        try:
+            import h5py
+        except ImportError:  # pragma: no cover - h5py is a dependency
+            raise InputError("measurement", str(path), "a MAT v7.3 file needs h5py (pip install h5py)") from None
+        mapping = {}
+        with h5py.File(path, "r") as f:
+            for k, v in f.items():
+                if isinstance(v, h5py.Dataset) and v.dtype.kind in "fiu":
+                    mapping[k] = np.asarray(v[()]).T  # MATLAB stores column-major
+    except ValueError as exc:
+        raise InputError("measurement", str(path), f"a readable MAT file ({exc})") from None
+    return _from_mapping(mapping, variable, str(path))

@@ -1,0 +1,283 @@
+"""A measured vibration record and its operating point: sidecar, loading, validation.
+
+A measurement is a file (any layout of :mod:`compare.formats`) plus a *sidecar*
+(JSON or TOML, same keys) that says what the file cannot:
+
+=========================  ========  ==========================================================
+key                        required  meaning
+=========================  ========  ==========================================================
+``fs_hz``                  [1]_      sampling rate (Hz)
+``speed_rpm``              [2]_      nominal pinion (input) speed (rpm); refined from the data
+``torque_nm``              [2]_      pinion (input) torque (N m)
+``pair``                   yes       preset name (``"spur-gds"``) or a pair table as in a pair TOML
+``sensor``                 [2]_      the vibration channel: name or 0-based column index
+``tacho``                  no        tachometer channel (name or index); none: speed from the spectrum
+``tacho_pulses_per_rev``   no        pulses per revolution of ``tacho_shaft`` (default 1)
+``tacho_shaft``            no        ``"pinion"`` (default) or ``"wheel"``
+``fault``                  no        free label (``"healthy"``, ``"pitting_L"``, ...)
+``channels``               no        names of the columns of a file without names
+``time_column``            no        CSV column holding time (s) (default: one named ``time``/``t``)
+``variable``               no        NPZ/MAT variable to read when the file holds several
+``format``                 no        one of :data:`compare.formats.FORMATS` (default ``"auto"``)
+``start_s``, ``duration_s`` no       keep only this part of the record (s)
+=========================  ========  ==========================================================
+
+.. [1] unless the file gives it (time column, WAV header, ``fs`` variable, a public layout).
+.. [2] unless the public layout's file name or format gives it.
+
+Refused with :class:`gearpit.errors.InputError` naming the field: unknown keys, a
+missing fs, NaN or infinite samples (first bad sample named), a wrong column count,
+a constant sensor channel, a record shorter than two revolutions of the slower shaft.
+"""
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from compare.formats import FORMATS, read_record
+from gearpit.errors import InputError, require, require_positive
+from gearpit.tomlio import check_keys, read_toml
+
+SIDECAR_KEYS = ("fs_hz", "speed_rpm", "torque_nm", "pair", "sensor", "tacho", "tacho_pulses_per_rev", "tacho_shaft",
+                "fault", "channels", "time_column", "variable", "format", "start_s", "duration_s")
+SIDECAR_SUFFIXES = (".toml", ".json", ".meta.toml", ".meta.json")
+MIN_REVOLUTIONS = 2.0
+
+
+@dataclass(frozen=True)
+class Sidecar:
+    """The sidecar's content, validated (module docstring; SI, speeds in rpm as named)."""
+
+    pair: Any
+    speed_rpm: float | None = None
+    torque_nm: float | None = None
+    fs_hz: float | None = None
+    sensor: str | int | None = None
+    tacho: str | int | None = None
+    tacho_pulses_per_rev: int = 1
+    tacho_shaft: str = "pinion"
+    fault: str | None = None
+    channels: tuple | None = None
+    time_column: str | None = None
+    variable: str | None = None
+    format: str = "auto"
+    start_s: float = 0.0
+    duration_s: float | None = None
+
+    @classmethod
+    def from_dict(cls, d: dict, where: str = "sidecar") -> "Sidecar":
+        """Build from the parsed JSON/TOML; unknown keys and bad values raise :class:`InputError`."""
+        require(isinstance(d, dict), where, type(d).__name__, "a table of sidecar keys")
+        check_keys(d, SIDECAR_KEYS, where, required={"pair"})
+        pair = _pair(d["pair"], f"{where}.pair")
+        kw: dict[str, Any] = {"pair": pair}
+        for key in ("speed_rpm", "torque_nm", "fs_hz", "start_s", "duration_s"):
+            if key in d:
+                v = d[key]
+                ok = isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+                require(ok, f"{where}.{key}", v, "a finite number")
+                if key != "start_s" and key != "torque_nm":
+                    require_positive(f"{where}.{key}", float(v))
+                if key in ("start_s", "torque_nm"):
+                    require(v >= 0, f"{where}.{key}", v, "a number >= 0")
+                kw[key] = float(v)
+        for key in ("sensor", "tacho"):
+            if key in d:
+                v = d[key]
+                require(isinstance(v, str) or (isinstance(v, int) and not isinstance(v, bool) and v >= 0),
+                        f"{where}.{key}", v, "a channel name or a 0-based column index")
+                kw[key] = v
+        if "tacho_pulses_per_rev" in d:
+            v = d["tacho_pulses_per_rev"]
+            require(isinstance(v, int) and not isinstance(v, bool) and v >= 1, f"{where}.tacho_pulses_per_rev", v,
+                    "an integer >= 1")
+            kw["tacho_pulses_per_rev"] = v
+        if "tacho_shaft" in d:
+            require(d["tacho_shaft"] in ("pinion", "wheel"), f"{where}.tacho_shaft", d["tacho_shaft"],
+                    "pinion or wheel")
+            kw["tacho_shaft"] = d["tacho_shaft"]
+        if "channels" in d:
+            ch = d["channels"]
+            require(isinstance(ch, list) and ch and all(isinstance(c, str) and c for c in ch)
+                    and len(set(ch)) == len(ch), f"{where}.channels", ch, "a list of distinct channel names")
+            kw["channels"] = tuple(ch)
+        for key in ("fault", "time_column", "variable"):
+            if key in d:
+                require(isinstance(d[key], str) and d[key] != "", f"{where}.{key}", d[key], "a non-empty string")
+                kw[key] = d[key]
+        if "format" in d:
+            require(d["format"] in FORMATS, f"{where}.format", d["format"], "one of: " + ", ".join(FORMATS))
+            kw["format"] = d["format"]
+        return cls(**kw)
+
+    def to_dict(self) -> dict:
+        """JSON-able form (the pair as its table)."""
+        out = {k: getattr(self, k) for k in SIDECAR_KEYS if k != "pair" and getattr(self, k) is not None}
+        if self.channels is not None:
+            out["channels"] = list(self.channels)
+        out["pair"] = self.pair.to_dict()
+        return out
+
+
+def _pair(value, where: str):
+    from datagen.geometry import pair_from_dict, preset
+
+    if isinstance(value, str):
+        return preset(value)
+    require(isinstance(value, dict), where, value, "a preset name or a pair table")
+    return pair_from_dict(value, where=where)
+
+
+def read_sidecar(path: str | Path) -> Sidecar:
+    """Read a JSON (``.json``) or TOML sidecar."""
+    p = Path(path)
+    if p.suffix.lower() == ".json":
+        try:
+            d = json.loads(p.read_text(encoding="utf-8"))
+        except OSError as exc:
+            raise InputError("sidecar", str(p), f"a readable JSON file ({exc.strerror})") from None
+        except json.JSONDecodeError as exc:
+            raise InputError("sidecar", str(p), f"valid JSON ({exc})") from None
+    else:
+        d = read_toml(p)
+    return Sidecar.from_dict(d, where=p.name)
+
+
+def find_sidecar(measurement_path: str | Path) -> Path:
+    """The sidecar beside a measurement: same stem with one of :data:`SIDECAR_SUFFIXES`."""
+    p = Path(measurement_path)
+    candidates = [p.with_name(p.stem + s) for s in SIDECAR_SUFFIXES] + [p.with_name(p.name + s) for s in (".toml", ".json")]
+    for c in candidates:
+        if c.is_file() and c != p:
+            return c
+    raise InputError("--meta", None, "a sidecar (JSON/TOML) given with --meta or found beside the file as "
+                     + " or ".join(c.name for c in candidates[:2]))
+
+
+@dataclass(frozen=True, eq=False)
+class Measurement:
+    """A validated record: all channels, the sensor and tacho names, fs and the operating point.
+
+    Attributes
+    ----------
+    channels : dict of str -> ndarray (n,)
+    fs_hz : float
+    sensor, tacho : str, str or None
+        Channel names.
+    speed_rpm, torque_nm : float
+        Nominal pinion speed (rpm) and torque (N m) from the sidecar (or file name).
+    pair : GearPair
+    sidecar : Sidecar
+    source : str
+        Where it came from.
+    """
+
+    channels: dict
+    fs_hz: float
+    sensor: str
+    tacho: str | None
+    speed_rpm: float
+    torque_nm: float
+    pair: Any
+    sidecar: Sidecar
+    source: str = ""
+    fault: str | None = None
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def signal(self) -> np.ndarray:
+        """The sensor channel."""
+        return self.channels[self.sensor]
+
+    @property
+    def n_samples(self) -> int:
+        return int(self.signal.size)
+
+    @property
+    def duration_s(self) -> float:
+        return self.n_samples / self.fs_hz
+
+    @property
+    def tacho_signal(self) -> np.ndarray | None:
+        return None if self.tacho is None else self.channels[self.tacho]
+
+
+def _channel(ref, names: tuple, where: str) -> str:
+    if isinstance(ref, int):
+        require(ref < len(names), where, ref, f"a column index in [0, {len(names) - 1}]")
+        return names[ref]
+    require(ref in names, where, ref, "one of: " + ", ".join(names))
+    return ref
+
+
+def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "arrays",
+                            hints: dict | None = None) -> Measurement:
+    """Validate channels (name -> 1-D array) against a sidecar; the one place all checks live."""
+    hints = hints or {}
+    names = tuple(channels)
+    require(names, "channels", "none", "at least one channel")
+    n = {np.asarray(v).size for v in channels.values()}
+    require(len(n) == 1, "channels", {k: np.asarray(v).size for k, v in channels.items()}, "equal lengths")
+    fs = sidecar.fs_hz if sidecar.fs_hz is not None else hints.get("fs_hz")
+    require(fs is not None, "fs_hz", None, "a sampling rate: give fs_hz in the sidecar (or a time column)")
+    require_positive("fs_hz", float(fs))
+    speed = sidecar.speed_rpm if sidecar.speed_rpm is not None else hints.get("speed_rpm")
+    require(speed is not None, "speed_rpm", None, "the nominal pinion speed in the sidecar")
+    require_positive("speed_rpm", float(speed))
+    torque = sidecar.torque_nm if sidecar.torque_nm is not None else hints.get("torque_nm", None)
+    require(torque is not None, "torque_nm", None, "the pinion torque in the sidecar")
+    sensor_ref = sidecar.sensor if sidecar.sensor is not None else hints.get("sensor")
+    if sensor_ref is None and len(names) == 1:
+        sensor_ref = names[0]
+    require(sensor_ref is not None, "sensor", None, "which channel is the sensor: one of " + ", ".join(names))
+    sensor = _channel(sensor_ref, names, "sensor")
+    tacho_ref = sidecar.tacho if sidecar.tacho is not None else hints.get("tacho")
+    tacho = _channel(tacho_ref, names, "tacho") if tacho_ref is not None else None
+    require(tacho != sensor, "tacho", tacho, "a channel other than the sensor")
+    data = {k: np.asarray(v, dtype=float).ravel() for k, v in channels.items()}
+    i0 = int(round(sidecar.start_s * fs))
+    i1 = data[sensor].size if sidecar.duration_s is None else i0 + int(round(sidecar.duration_s * fs))
+    require(i1 <= data[sensor].size, "start_s + duration_s", sidecar.start_s + (sidecar.duration_s or 0.0),
+            f"<= the record length {data[sensor].size / fs:.4g} s")
+    data = {k: v[i0:i1] for k, v in data.items()}
+    for key in (sensor,) + ((tacho,) if tacho else ()):
+        bad = np.nonzero(~np.isfinite(data[key]))[0]
+        require(bad.size == 0, f"channel {key}", f"{bad.size} NaN/inf samples, first at index {bad[:1].tolist()}",
+                "finite samples only")
+    require(float(np.ptp(data[sensor])) > 0, f"channel {sensor}", "constant", "a varying vibration signal")
+    pair = sidecar.pair
+    slow_hz = pair.shaft_frequency_hz("wheel" if pair.wheel.teeth >= pair.pinion.teeth else "pinion", float(speed))
+    n_min = int(math.ceil(MIN_REVOLUTIONS * fs / slow_hz))
+    require(data[sensor].size >= n_min, "measurement length", f"{data[sensor].size} samples "
+            f"({data[sensor].size / fs:.3g} s)", f">= {n_min} samples: two revolutions of the slower shaft "
+            f"({MIN_REVOLUTIONS / slow_hz:.3g} s at {float(speed):g} rpm)")
+    fault = sidecar.fault if sidecar.fault is not None else hints.get("fault")
+    return Measurement(channels=data, fs_hz=float(fs), sensor=sensor, tacho=tacho, speed_rpm=float(speed),
+                       torque_nm=float(torque), pair=pair, sidecar=sidecar, source=source, fault=fault)
+
+
+def load_measurement(path: str | Path, sidecar: Sidecar | str | Path | None = None) -> Measurement:
+    """Load and validate a measurement file with its sidecar (found beside it when not given)."""
+    p = Path(path)
+    require(p.is_file(), "measurement", str(p), "an existing file")
+    if not isinstance(sidecar, Sidecar):
+        sidecar = read_sidecar(sidecar if sidecar is not None else find_sidecar(p))
+    rec = read_record(p, sidecar.format, time_column=sidecar.time_column, variable=sidecar.variable)
+    names = rec.names
+    if sidecar.channels is not None:
+        require(len(sidecar.channels) == rec.data.shape[1], "channels", list(sidecar.channels),
+                f"{rec.data.shape[1]} names, one per data column of {p.name}")
+        names = sidecar.channels
+    hints = dict(rec.hints)
+    if rec.fs_hz is not None:
+        if sidecar.fs_hz is not None:
+            require(abs(rec.fs_hz - sidecar.fs_hz) <= 1e-3 * sidecar.fs_hz, "fs_hz", sidecar.fs_hz,
+                    f"the file's own sampling rate {rec.fs_hz:.6g} Hz (or leave fs_hz out)")
+        hints["fs_hz"] = rec.fs_hz
+    channels = {name: rec.data[:, i] for i, name in enumerate(names)}
+    return measurement_from_arrays(channels, sidecar, source=str(p), hints=hints)

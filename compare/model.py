@@ -1,0 +1,193 @@
+"""The comparison model: a TOML file the user edits (or extends with ``--add``).
+
+It is a simulation case file (:mod:`datagen.simulate`) without what the
+measurement fixes - pair, operating point, duration, sampling rate - plus three
+keys of its own::
+
+    description = "rig A, first guess"     # free text, shown in the ledger
+    sensor = "acc_pinion_loa_m_s2"          # simulated channel compared with the measured sensor
+    plugins = ["my_effects.py"]             # user effect files (relative to this file), loaded first
+    [drivetrain]                            # optional: datagen.lumped_model.DriveTrain fields (SI)
+    mesh_damping_ratio = 0.07
+    [solver]                                # optional: omega_dt, method, transient_s
+    [stiffness]                             # optional: positions_per_cycle, n_slices, pit_model
+    [pits]                                  # optional: pits of the model (datagen.pits.PitSpec keys, gear, grid)
+    [[effects]]                             # optional, repeatable: name + parameters (SI)
+    name = "eccentricity_pinion"
+    amplitude_m = 2e-05
+
+A missing model file means the baseline: no effects, default drive train,
+sensor ``acc_pinion_loa_m_s2``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+from datagen.effects import EffectSpec, build_effects, load_plugin
+from gearpit.atomic import atomic_path
+from gearpit.errors import InputError, require
+from gearpit.tomlio import check_keys, read_toml
+
+MODEL_KEYS = {"description", "sensor", "plugins", "drivetrain", "solver", "stiffness", "pits", "effects"}
+DEFAULT_SENSOR = "acc_pinion_loa_m_s2"
+
+
+@dataclass(frozen=True)
+class ComparisonModel:
+    """The model side of a comparison (module docstring); ``effects`` are built :class:`Effect` instances."""
+
+    effects: tuple = ()
+    sensor: str = DEFAULT_SENSOR
+    description: str = ""
+    plugins: tuple = ()
+    tables: dict = field(default_factory=dict)   # drivetrain / solver / stiffness / pits, as in a case file
+    path: Path | None = None
+
+    @classmethod
+    def from_dict(cls, d: dict, *, path: Path | None = None) -> "ComparisonModel":
+        """From the TOML form; plugins are loaded before the effects are checked."""
+        require(isinstance(d, dict), "model", d, "a table")
+        check_keys(d, MODEL_KEYS, "model")
+        sensor = d.get("sensor", DEFAULT_SENSOR)
+        require(isinstance(sensor, str) and sensor, "model.sensor", sensor, "a simulated channel name")
+        desc = d.get("description", "")
+        require(isinstance(desc, str), "model.description", desc, "a string")
+        plugins = d.get("plugins", [])
+        require(isinstance(plugins, list) and all(isinstance(p, str) for p in plugins), "model.plugins", plugins,
+                "a list of .py file paths")
+        base = path.parent if path is not None else Path(".")
+        for p in plugins:
+            load_plugin(Path(p) if Path(p).is_absolute() else base / p)
+        effects = d.get("effects", [])
+        require(isinstance(effects, list), "model.effects", effects, "an array of tables [[effects]]")
+        built = build_effects(effects)
+        tables = {k: d[k] for k in ("drivetrain", "solver", "stiffness", "pits") if k in d}
+        for k, v in tables.items():
+            require(isinstance(v, dict), f"model.{k}", v, "a table")
+        model = cls(effects=built, sensor=sensor, description=desc, plugins=tuple(plugins), tables=tables, path=path)
+        _check_unique(model.effects)
+        return model
+
+    @classmethod
+    def load(cls, path: str | Path) -> "ComparisonModel":
+        p = Path(path)
+        if not p.exists():
+            return cls(path=p)
+        return cls.from_dict(read_toml(p), path=p)
+
+    # ------------------------------------------------------------------ edits
+    def with_effect(self, effect) -> "ComparisonModel":
+        """The model with ``effect`` added (replacing one of the same name)."""
+        kept = tuple(e for e in self.effects if e.name != effect.name)
+        out = replace(self, effects=kept + (effect,))
+        build_effects(out.effects)  # at most one nonlinear mesh law
+        return out
+
+    def with_plugin(self, plugin: str) -> "ComparisonModel":
+        return self if plugin in self.plugins else replace(self, plugins=self.plugins + (plugin,))
+
+    @property
+    def effect_names(self) -> tuple:
+        return tuple(e.name for e in self.effects)
+
+    def describe(self) -> str:
+        """One line: ``baseline`` or ``eccentricity_pinion(amplitude_m=2e-05) + ...``."""
+        if not self.effects:
+            return "baseline"
+        parts = []
+        for e in self.effects:
+            ps = ", ".join(f"{k}={_fmt(v)}" for k, v in e.params().items())
+            parts.append(f"{e.name}({ps})")
+        return " + ".join(parts)
+
+    def to_dict(self) -> dict:
+        d: dict = {}
+        if self.description:
+            d["description"] = self.description
+        d["sensor"] = self.sensor
+        if self.plugins:
+            d["plugins"] = list(self.plugins)
+        d.update(self.tables)
+        d["effects"] = [e.to_dict() for e in self.effects]
+        return d
+
+    def save(self, path: str | Path | None = None) -> Path:
+        """Write the TOML form atomically (to ``path`` or where it was loaded from)."""
+        p = Path(path) if path is not None else self.path
+        require(p is not None, "model path", None, "a file to write the model to")
+        with atomic_path(p) as tmp:
+            tmp.write_text("# gearpit comparison model (gearpit compare --model); edit freely\n" + to_toml(self.to_dict()),
+                           encoding="utf-8")
+        return p
+
+    # ------------------------------------------------------------------ simulation
+    def case(self, pair, *, speed_rpm: float, torque_nm: float, duration_s: float, fs_hz: float, seed: int = 0,
+             extra_effects: tuple = (), solver: dict | None = None):
+        """The :class:`datagen.simulate.Case` of this model at an operating point, plus extra effects."""
+        from datagen.simulate import Case
+
+        d = {"duration_s": float(duration_s), "fs_hz": float(fs_hz), "seed": int(seed), "pair": pair.to_dict(),
+             "operating": {"speed_rpm": float(speed_rpm), "torque_nm": float(torque_nm)}}
+        d.update({k: v for k, v in self.tables.items()})
+        if solver:
+            d["solver"] = {**d.get("solver", {}), **solver}
+        case = Case.from_dict(d)
+        extra_names = {e.name for e in extra_effects}
+        effects = tuple(e for e in self.effects if e.name not in extra_names) + tuple(extra_effects)
+        return replace(case, effects=effects)
+
+
+def _check_unique(effects) -> None:
+    seen = set()
+    for e in effects:
+        require(e.name not in seen, "model.effects", e.name, "each effect at most once")
+        seen.add(e.name)
+
+
+def parse_add(text: str):
+    """``EFFECT[:key=value,...]`` -> (name, params dict or None when no parameters were given)."""
+    name, sep, rest = text.partition(":")
+    if not sep or not rest.strip():
+        EffectSpec.from_dict({"name": name.strip()})  # validates the name
+        return name.strip(), None
+    spec = EffectSpec.from_string(text)
+    return spec.name, dict(spec.params)
+
+
+# ---------------------------------------------------------------------- TOML writing (the subset we emit)
+def _fmt(v) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        if not math.isfinite(v):
+            raise InputError("model value", v, "a finite number")
+        return repr(v)
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_fmt(x) for x in v) + "]"
+    raise InputError("model value", v, "a number, string, boolean or list")
+
+
+def to_toml(d: dict, prefix: str = "") -> str:
+    """Scalars first, then sub-tables, then arrays of tables (enough for models and sidecars)."""
+    lines = []
+    for k, v in d.items():
+        if not isinstance(v, dict) and not (isinstance(v, list) and v and all(isinstance(x, dict) for x in v)):
+            if isinstance(v, list) and not v and k == "effects":
+                continue
+            lines.append(f"{k} = {_fmt(v)}")
+    for k, v in d.items():
+        if isinstance(v, dict):
+            lines.append(f"\n[{prefix}{k}]")
+            lines.append(to_toml(v, prefix=f"{prefix}{k}.").rstrip("\n"))
+    for k, v in d.items():
+        if isinstance(v, list) and v and all(isinstance(x, dict) for x in v):
+            for item in v:
+                lines.append(f"\n[[{prefix}{k}]]")
+                lines.append(to_toml(item, prefix=f"{prefix}{k}.").rstrip("\n"))
+    return "\n".join(x for x in lines if x != "") + "\n"

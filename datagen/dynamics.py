@@ -1,0 +1,209 @@
+"""Dynamic response of a batch of cases: periodic steady state by shooting, or time stepping.
+
+This module chooses the path per case and batches cases; the paths live in
+:mod:`datagen.shooting` and :mod:`datagen.time_stepping`, the channels in
+:mod:`datagen.output_channels`.
+
+Two solution paths, both on the batched Newmark integrator of
+:mod:`datagen.newmark` and ending in the same anti-alias filter
+(:mod:`datagen.decimation`):
+
+- **periodic** (:mod:`datagen.shooting`; constant speed and load, linear mesh
+  law): the steady state repeats after the record period ``T = P / f_m``
+  (``P`` = 1 mesh cycle for a healthy pair, one pinion revolution for pinion
+  pits, ...); found by shooting, no start-up transient at all;
+- **transient** (:mod:`datagen.time_stepping`; any nonlinear mesh law,
+  speed/torque modulation or extra forces): starts from the static equilibrium
+  under load and discards ``transient_s`` (default ``ln(1000)`` slowest modal
+  decay times of the mean system, rounded up to whole record periods: the
+  start-up transient decays by 60 dB; 0.48 s for ``spur-gds`` with the default
+  drive train), then keeps ``duration_s``.
+
+``auto`` picks the periodic path whenever it is allowed and its estimated cost
+(one pass over ``T`` plus ``2n + 1``-column runs over the distinct mesh cycles)
+is lower than the transient path's (``transient_s + duration_s``). Cases are
+batched when they share the DOF count and the step grid (periodic: record
+period and steps per mesh cycle, merged within 15 %; transient: decimation
+factor, output length and discard length); different pairs, speeds and loads
+can share a batch.
+
+References
+----------
+../shared/DESIGN.md, "Speed" (rank-one mesh term, shooting instead of long transients).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from datagen.mesh_excitation import MeshRecord
+
+METHODS = ("auto", "periodic", "transient")
+#: decay of the start-up transient before the kept record starts
+TRANSIENT_DECAY = math.log(1000.0)
+#: time steps per chunk in the transient path
+CHUNK = 4096
+#: memory for stored periodic trajectories per batch (bytes); larger groups are split
+MEMORY_BUDGET_BYTES = 256e6
+
+
+@dataclass(frozen=True, eq=False)
+class DynamicCase:
+    """What the solver needs of one case (built by :func:`datagen.simulate.simulate`)."""
+
+    model: object                 # LumpedModel
+    record: MeshRecord
+    effects: tuple
+    ctx: object                   # EffectContext
+    speed_rpm: float
+    torque_nm: float
+    fs_hz: float
+    duration_s: float
+    omega_dt: float = 0.3
+    method: str = "auto"
+    transient_s: float | None = None
+
+    @property
+    def n_out(self) -> int:
+        return int(round(self.duration_s * self.fs_hz))
+
+    @property
+    def mesh_hz(self) -> float:
+        return self.model.pair.mesh_frequency_hz(self.speed_rpm)
+
+    @property
+    def period_s(self) -> float:
+        return self.record.period_cycles / self.mesh_hz
+
+    @property
+    def needs_transient(self) -> bool:
+        return any(e.is_nonlinear or e.is_nonstationary for e in self.effects)
+
+    @property
+    def dt_max(self) -> float:
+        return self.model.time_step_s(self.omega_dt)
+
+    @property
+    def discard_s(self) -> float:
+        """Start-up transient to discard (s): given, or ln(1000) slowest decay times rounded up to whole
+        record periods (so that, at constant speed, the kept record starts at the same mesh phase as the
+        periodic path's)."""
+        if self.transient_s is not None:
+            return self.transient_s
+        t = TRANSIENT_DECAY * self.model.slowest_decay_s
+        return math.ceil(t / self.period_s) * self.period_s
+
+    def chosen_method(self) -> str:
+        if self.needs_transient or self.method == "transient":
+            return "transient"
+        if self.method == "periodic":
+            return "periodic"
+        # one storing pass over the period, plus the (2n + 1)-column runs over the distinct cycles
+        # (a column costs about half a single-column step: the per-step overhead is shared)
+        share = self.record.distinct_cycles() / self.record.period_cycles
+        cost_periodic = self.period_s * (1.0 + share * (2 * self.model.n + 1) / 2)
+        cost_transient = self.discard_s + self.duration_s
+        return "periodic" if cost_periodic <= cost_transient else "transient"
+
+
+@dataclass
+class Response:
+    """Channels at the output rate (1-D arrays) plus solver facts."""
+
+    channels: dict
+    info: dict = field(default_factory=dict)
+
+
+def solve(cases: list[DynamicCase]) -> list[Response]:
+    """Responses of all cases; cases are batched when their DOF count and step grid agree.
+
+    The small matrix products of the time loop run single-threaded: a
+    multi-threaded BLAS costs far more in synchronisation than it gains on
+    (cases x 20) @ (20 x 22) products (30x slower on a busy 2-core machine).
+    """
+    with _single_thread_blas():
+        return _solve(cases)
+
+
+def _single_thread_blas():
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:  # pragma: no cover - threadpoolctl comes with scikit-learn
+        import contextlib
+
+        return contextlib.nullcontext()
+    return threadpool_limits(limits=1, user_api="blas")
+
+
+def _solve(cases: list[DynamicCase]) -> list[Response]:
+    from datagen.shooting import periodic_response
+    from datagen.time_stepping import transient_response
+
+    out: list[Response | None] = [None] * len(cases)
+    groups: dict[tuple, list[int]] = {}
+    steps = {}
+    for i, c in enumerate(cases):
+        if c.chosen_method() == "periodic":
+            steps[i] = math.ceil(c.period_s / c.record.period_cycles / c.dt_max)
+    merged = _merge_step_counts({i: (cases[i].model.n, cases[i].record.period_cycles, s) for i, s in steps.items()})
+    for i, c in enumerate(cases):
+        if i in merged:
+            key = ("periodic", c.model.n, c.record.period_cycles, merged[i])
+        else:
+            R = max(2, math.ceil(1.0 / (c.fs_hz * c.dt_max)))
+            key = ("transient", c.model.n, R, c.fs_hz, c.n_out, round(c.discard_s * R * c.fs_hz))
+        groups.setdefault(key, []).append(i)
+    for key, idx in groups.items():
+        if key[0] == "periodic":     # bound the stored trajectories: N x cases x (3n + channels) floats
+            per_case = key[2] * key[3] * (3 * key[1] + 24) * 8
+            size = max(1, int(MEMORY_BUDGET_BYTES // per_case))
+        else:
+            size = len(idx)
+        for start in range(0, len(idx), size):
+            sub = idx[start:start + size]
+            batch = [cases[i] for i in sub]
+            if key[0] == "periodic":
+                res = periodic_response(batch, key[2], key[3])
+            else:
+                res = transient_response(batch, key[2], key[5])
+            for i, r in zip(sub, res):
+                out[i] = r
+    return out
+
+
+def _merge_step_counts(items: dict[int, tuple[int, int, int]], slack: float = 1.15) -> dict[int, int]:
+    """Steps per mesh cycle for each case, raised so that cases within ``slack`` of each other share a batch.
+
+    ``items``: case index -> (DOF count, period in cycles, minimum steps per cycle).
+    """
+    out = {}
+    by_key: dict[tuple, list[tuple[int, int]]] = {}
+    for i, (n, P, s) in items.items():
+        by_key.setdefault((n, P), []).append((max(s, 4), i))
+    for lst in by_key.values():
+        lst.sort()
+        start = 0
+        while start < len(lst):
+            end = start
+            while end + 1 < len(lst) and lst[end + 1][0] <= slack * lst[start][0]:
+                end += 1
+            for _, i in lst[start:end + 1]:
+                out[i] = lst[end][0]
+            start = end + 1
+    return out
+
+
+# ---------------------------------------------------------------------- shared set-up
+def static_state(c: DynamicCase):
+    """Static equilibrium under the mean mesh stiffness and mean error force; pinion wind-up in mesh cycles."""
+    e_mean = float(np.mean(c.record.error_force))
+    q_s = c.model.static_deflection(error_force_n=e_mean)
+    x_s = c.model.pair.pinion.teeth * q_s[c.model.index("phi_1")] / (2 * np.pi)
+    return q_s, x_s
+
+
+def mesh_damping(cases) -> np.ndarray:
+    """Mesh damping coefficient of each case (N s/m)."""
+    return np.array([c.model.c_mesh_n_s_per_m for c in cases])

@@ -1,0 +1,49 @@
+"""Backlash: per tooth-pair dead zone, contact loss and back-flank impact (hook 4).
+
+Each tooth pair s in contact carries ``k_s * d_s`` with ``d_s = delta - e_s``
+when the drive flanks touch (``d_s > 0``), nothing inside the clearance
+(``-b <= d_s <= 0``) and ``k_s * (d_s + b)`` on the back flank (``d_s < -b``);
+the back-flank stiffness is taken equal to the drive flank's. Mesh damping
+acts only in the fraction of the stiffness that is in contact.
+
+References
+----------
+Kahraman, A., Singh, R. (1990). Non-linear dynamics of a spur gear pair. J. Sound Vib. 142(1), 49-75.
+../shared/PHYSICS.md section 4 (dead-zone mesh force).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from datagen.effects.base import Effect, register
+
+
+@register
+@dataclass(frozen=True)
+class Backlash(Effect):
+    """Dead-zone mesh law.
+
+    Parameters
+    ----------
+    backlash_m : float
+        Total circumferential clearance along the line of action (m).
+    """
+
+    name = "backlash"
+    signature = "at light load/high speed: contact loss -> impacts, broadband rattle, sub/superharmonics of fm"
+    backlash_m: float = field(default=100e-6, metadata={"unit": "m", "bounds": (0.0, 1e-3)})
+
+    @classmethod
+    def mesh_force_batch(cls, params, delta_m, delta_dot_m_s, mesh):
+        b = params["backlash_m"][:, None]
+        d = delta_m[:, None] - mesh.e_slots_m
+        ks = mesh.k_slots_n_per_m
+        front = d > 0
+        back = d < -b
+        elastic = np.sum(ks * (np.where(front, d, 0.0) + np.where(back, d + b, 0.0)), axis=1)
+        k_touch = np.sum(ks * (front | back), axis=1)
+        frac = k_touch / np.maximum(np.sum(ks, axis=1), 1e-30)
+        c = mesh.c_n_s_per_m * frac
+        return elastic + c * delta_dot_m_s, k_touch, c

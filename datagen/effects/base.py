@@ -1,0 +1,426 @@
+"""The effect contract: how a physical effect plugs into a simulation.
+
+An *effect* is one physical phenomenon (backlash, sensor noise, a housing
+resonance, a profile error, ...) written as a small module: a frozen dataclass
+of parameters plus one or more *contribution hooks* at fixed points of the
+simulation. The integrator (:mod:`datagen.newmark`, driven by
+:mod:`datagen.simulate`) knows the seven contribution points, never the
+effects. Adding an effect never means editing the integrator.
+
+How to write an effect
+----------------------
+1. Subclass :class:`Effect` as a frozen dataclass and decorate it with
+   :func:`register`::
+
+       from dataclasses import dataclass, field
+       from datagen.effects.base import Effect, register
+
+       @register
+       @dataclass(frozen=True)
+       class Runout(Effect):
+           name = "runout"                       # short, stable, unique
+           signature = "wheel shaft order 1 and +/-fr2 sidebands around mesh harmonics"
+           amplitude_m: float = field(default=5e-6, metadata={"unit": "m", "bounds": (0.0, 50e-6)})
+           phase_rad: float = field(default=0.0, metadata={"unit": "rad", "bounds": (-3.1416, 3.1416)})
+
+           def deviation_period_cycles(self, ctx):
+               return ctx.pair.wheel.teeth          # repeats once per wheel revolution
+
+           def angle_deviation_m(self, theta_pinion_rad, theta_wheel_rad, ctx):
+               return self.amplitude_m * np.sin(theta_wheel_rad + self.phase_rad)
+
+2. Every parameter field needs a default and ``metadata`` with ``"unit"`` (SI,
+   ``"-"`` for dimensionless) and ``"bounds"`` ``(lo, hi)``: values outside
+   raise :class:`~gearpit.errors.InputError`, and the model-vs-measurement
+   comparison fits the parameter within these bounds. A string option uses
+   ``metadata={"unit": "-", "choices": ("a", "b")}`` instead of bounds.
+3. ``name`` is the key used in case files (``[[effects]] name = "runout"``)
+   and on the command line (``--effect runout:amplitude_m=5e-6``);
+   ``signature`` is one line saying which shaft orders, sidebands, bands or
+   envelope lines the effect leaves: the comparison's attribution reads it.
+4. Override only the hooks you need (a hook you do not override contributes
+   nothing). All angles are shaft rotation angles (rad) measured from the
+   start of the simulation, all quantities SI. The hooks:
+
+   ===  ==========================  ==============================================================
+   no.  hook                        what it returns
+   ===  ==========================  ==============================================================
+   1    ``mesh_stiffness``          a modified :class:`MeshStiffness` (pits, tip relief, Hertz)
+   2a   ``tooth_deviation_m``       deviation e(g, pinion tooth, wheel tooth) (m) of each contact
+                                    point from the ideal flank (profile/pitch error, tip relief);
+                                    positive = material missing = less deflection carried
+   2b   ``angle_deviation_m``       deviation e(theta1, theta2) (m) along the line of action
+                                    (run-out, eccentricity)
+   3    ``generalized_force``       extra generalized forces (n_t, n_dof) on the nominal
+                                    trajectory (unbalance, torque ripple); N or N m per DOF
+   4    ``mesh_force_batch``        nonlinear mesh law F(delta, delta_dot) and its derivatives,
+                                    vectorised over the cases that carry the effect (classmethod);
+                                    the only hook that makes the integrator iterate (Newton)
+   5    ``operating_point``         speed (rpm) and load torque (N m) as functions of time
+   6    ``output_path``             channels -> channels: bearing forces to housing acceleration
+   7    ``measurement``             channels -> channels: gain, noise, clipping (gets an rng)
+   ===  ==========================  ==============================================================
+
+   Hooks 2a/2b define the *error force* E = sum over contact slices of
+   k_slice * e, so the linear mesh force is F = k(x) delta - E (+ damping).
+   Hook 3 sees the nominal trajectory (time and reference shaft angles) and
+   returns forces per DOF (``ctx.dof_index("phi_b")`` etc., DOFs of
+   :mod:`datagen.lumped_model`); state feedback belongs in hook 4.
+   Hook 5 sets the *reference* of the motor speed controller and the load
+   torque: the actual shaft speed follows through the drive train (fully well
+   below the controller bandwidth, ~5 Hz, partly above it).
+   Their deviations repeat after ``deviation_period_cycles`` mesh cycles
+   (default 1; z_pinion for a per-pinion-tooth error, z_wheel for the wheel):
+   the simulation's periodic record is the least common multiple.
+   Hooks 1, 2, 3, 5 run once per case before the time loop; hook 4 runs every
+   time step (and Newton iteration) on arrays over the cases; hooks 6, 7 run
+   once per case on the decimated output (1-D arrays at ``fs_hz``).
+   Hooks 3 and 5 make a case non-stationary, hook 4 nonlinear: such cases are
+   time-stepped through a start-up transient instead of solved for their
+   periodic steady state.
+5. Randomness only in hook 7 through the ``rng`` handed in (derived from the
+   case seed and the effect's position): same seed, same bytes.
+6. A user's own effect in their own file: ``load_plugin("my_effects.py")``
+   (or ``gearpit simulate case.toml --plugin my_effects.py``) imports the file,
+   whose ``@register`` decorators add the effects to the registry; they are
+   then available to simulation, datasets and comparison by name.
+
+References
+----------
+../shared/DESIGN.md, section "Effects" (the seven contribution points).
+"""
+from __future__ import annotations
+
+import dataclasses
+import importlib.util
+import math
+import sys
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+from typing import Any, ClassVar
+
+import numpy as np
+
+from gearpit.errors import InputError
+
+#: the contribution points, in simulation order (method names on :class:`Effect`)
+HOOKS = ("mesh_stiffness", "tooth_deviation_m", "angle_deviation_m", "generalized_force",
+         "mesh_force_batch", "operating_point", "output_path", "measurement")
+
+_REGISTRY: dict[str, type["Effect"]] = {}
+
+
+@dataclass(frozen=True)
+class EffectContext:
+    """What a hook may know about the case it acts on.
+
+    Parameters
+    ----------
+    pair : GearPair
+        The gear pair.
+    speed_rpm : float
+        Nominal pinion speed (rpm).
+    torque_nm : float
+        Nominal load torque on the pinion shaft (N m).
+    dof_names : tuple of str
+        Names of the generalized coordinates, in order (see :mod:`datagen.lumped_model`).
+    fs_hz : float
+        Output sampling rate (Hz).
+    duration_s : float
+        Output duration (s).
+    """
+
+    pair: Any
+    speed_rpm: float
+    torque_nm: float
+    dof_names: tuple = ()
+    fs_hz: float = 0.0
+    duration_s: float = 0.0
+
+    def dof_index(self, name: str) -> int:
+        """Column of DOF ``name`` in ``generalized_force`` output."""
+        if name not in self.dof_names:
+            raise InputError("dof", name, f"one of: {', '.join(self.dof_names)}")
+        return self.dof_names.index(name)
+
+    @property
+    def mesh_frequency_hz(self) -> float:
+        return self.pair.mesh_frequency_hz(self.speed_rpm)
+
+
+@dataclass(frozen=True)
+class MeshState:
+    """The mesh at one time step, arrays over the cases handed to ``mesh_force_batch``.
+
+    Parameters
+    ----------
+    k_n_per_m : ndarray (B,)
+        Total mesh stiffness at the current mesh position (N/m).
+    c_n_s_per_m : ndarray (B,)
+        Mesh damping coefficient (N s/m).
+    error_force_n : ndarray (B,)
+        E = sum over slices of k_slice * e (N); the linear law is k delta - E.
+    k_slots_n_per_m : ndarray (B, S)
+        Stiffness of each tooth pair in contact (N/m), 0 for an empty slot.
+    e_slots_m : ndarray (B, S)
+        Stiffness-weighted mean deviation of each tooth pair (m).
+    """
+
+    k_n_per_m: np.ndarray
+    c_n_s_per_m: np.ndarray
+    error_force_n: np.ndarray
+    k_slots_n_per_m: np.ndarray
+    e_slots_m: np.ndarray
+
+    def subset(self, idx: np.ndarray) -> "MeshState":
+        return MeshState(*(getattr(self, f.name)[idx] for f in fields(self)))
+
+
+@dataclass(frozen=True)
+class Effect:
+    """Base class of all effects (see the module docstring for how to write one).
+
+    Subclasses are frozen dataclasses whose fields are the parameters, each
+    with a default and ``metadata={"unit": ..., "bounds": (lo, hi)}``.
+    """
+
+    name: ClassVar[str] = ""
+    signature: ClassVar[str] = ""
+
+    def __post_init__(self):
+        for f in fields(self):
+            v = getattr(self, f.name)
+            where = f"effects.{self.name}.{f.name}"
+            if "choices" in f.metadata:
+                if v not in f.metadata["choices"]:
+                    raise InputError(where, v, f"one of: {', '.join(map(str, f.metadata['choices']))}")
+                continue
+            lo, hi = f.metadata["bounds"]
+            ok = isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and lo <= v <= hi
+            if not ok:
+                raise InputError(where, v, f"a number in [{lo}, {hi}] {f.metadata.get('unit', '')}".rstrip())
+
+    # ------------------------------------------------------------------ description
+    @classmethod
+    def hooks(cls) -> frozenset[str]:
+        """The contribution points this effect overrides."""
+        def owner(hook):
+            return next(k for k in cls.__mro__ if hook in vars(k))
+        return frozenset(h for h in HOOKS if owner(h) is not Effect)
+
+    @classmethod
+    def parameter_table(cls) -> list[dict]:
+        """One row per parameter: name, unit, default, bounds (or choices)."""
+        rows = []
+        for f in fields(cls):
+            row = {"name": f.name, "unit": f.metadata.get("unit", "-"), "default": f.default}
+            row.update({"choices": f.metadata["choices"]} if "choices" in f.metadata
+                       else {"bounds": tuple(f.metadata["bounds"])})
+            rows.append(row)
+        return rows
+
+    def params(self) -> dict:
+        """The parameters as a plain dict (SI, as in the field names)."""
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+    def to_dict(self) -> dict:
+        """The case-file form: ``{"name": ..., **params}``."""
+        return {"name": self.name, **self.params()}
+
+    @property
+    def is_nonlinear(self) -> bool:
+        return "mesh_force_batch" in self.hooks()
+
+    @property
+    def is_nonstationary(self) -> bool:
+        return bool({"generalized_force", "operating_point"} & self.hooks())
+
+    # ------------------------------------------------------------------ 1. stiffness
+    def mesh_stiffness(self, stiffness, ctx: EffectContext):
+        """Return a modified :class:`datagen.stiffness.MeshStiffness` (default: unchanged)."""
+        return stiffness
+
+    # ------------------------------------------------------------------ 2. displacement excitation
+    def deviation_period_cycles(self, ctx: EffectContext) -> int:
+        """Mesh cycles after which this effect's deviation repeats (default 1)."""
+        return 1
+
+    def tooth_deviation_m(self, g_m: np.ndarray, pinion_tooth: np.ndarray, wheel_tooth: np.ndarray,
+                          ctx: EffectContext) -> np.ndarray:
+        """Deviation (m) at line-of-action position ``g_m`` (from T1) on the given teeth."""
+        return np.zeros(np.broadcast(g_m, pinion_tooth, wheel_tooth).shape)
+
+    def angle_deviation_m(self, theta_pinion_rad: np.ndarray, theta_wheel_rad: np.ndarray,
+                          ctx: EffectContext) -> np.ndarray:
+        """Deviation (m) along the line of action as a function of the shaft angles."""
+        return np.zeros(np.broadcast(theta_pinion_rad, theta_wheel_rad).shape)
+
+    # ------------------------------------------------------------------ 3. extra forces
+    def generalized_force(self, t_s: np.ndarray, theta_pinion_rad: np.ndarray, theta_wheel_rad: np.ndarray,
+                          ctx: EffectContext) -> np.ndarray:
+        """Extra generalized forces, shape ``(len(t_s), len(ctx.dof_names))`` (N or N m)."""
+        return np.zeros((len(t_s), len(ctx.dof_names)))
+
+    # ------------------------------------------------------------------ 4. nonlinear mesh law
+    @classmethod
+    def mesh_force_batch(cls, params: dict[str, np.ndarray], delta_m: np.ndarray, delta_dot_m_s: np.ndarray,
+                         mesh: MeshState) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Mesh force and derivatives for the B cases carrying this effect.
+
+        ``params`` maps each parameter name to an array (B,) of its values.
+        Returns ``(F, dF/d delta, dF/d delta_dot)``, each (B,). Default: the linear law.
+        """
+        f = mesh.k_n_per_m * delta_m + mesh.c_n_s_per_m * delta_dot_m_s - mesh.error_force_n
+        return f, mesh.k_n_per_m, mesh.c_n_s_per_m
+
+    # ------------------------------------------------------------------ 5. operating point
+    def operating_point(self, t_s: np.ndarray, speed_rpm: np.ndarray, torque_nm: np.ndarray,
+                        ctx: EffectContext) -> tuple[np.ndarray, np.ndarray]:
+        """Return the (possibly modulated) pinion speed (rpm) and load torque (N m) at ``t_s``."""
+        return speed_rpm, torque_nm
+
+    # ------------------------------------------------------------------ 6., 7. output
+    def output_path(self, channels: dict[str, np.ndarray], fs_hz: float, ctx: EffectContext) -> dict[str, np.ndarray]:
+        """Transform the channels from bearing forces to housing acceleration (default: unchanged)."""
+        return channels
+
+    def measurement(self, channels: dict[str, np.ndarray], fs_hz: float, rng: np.random.Generator,
+                    ctx: EffectContext) -> dict[str, np.ndarray]:
+        """Apply the measurement chain (default: unchanged)."""
+        return channels
+
+
+# ---------------------------------------------------------------------- registry
+def register(effect_cls: type[Effect]) -> type[Effect]:
+    """Class decorator: add an :class:`Effect` subclass to the registry under its ``name``."""
+    if not (isinstance(effect_cls, type) and issubclass(effect_cls, Effect)):
+        raise InputError("effect", effect_cls, "a subclass of datagen.effects.base.Effect")
+    if not dataclasses.is_dataclass(effect_cls) or not effect_cls.__dataclass_params__.frozen:
+        raise InputError(f"effect {effect_cls.__name__}", "not a frozen dataclass", "@dataclass(frozen=True)")
+    name = effect_cls.name
+    if not (isinstance(name, str) and name.replace("_", "").isalnum() and name == name.lower()):
+        raise InputError(f"effect {effect_cls.__name__}.name", name, "a short lower-case identifier")
+    if not effect_cls.signature:
+        raise InputError(f"effect {name}.signature", "", "one line describing the signature it leaves")
+    for f in fields(effect_cls):
+        if f.default is dataclasses.MISSING:
+            raise InputError(f"effect {name}.{f.name}", "no default", "every parameter needs a default")
+        if "unit" not in f.metadata or ("bounds" not in f.metadata and "choices" not in f.metadata):
+            raise InputError(f"effect {name}.{f.name}", dict(f.metadata), "metadata with 'unit' and 'bounds' (or 'choices')")
+    old = _REGISTRY.get(name)
+    if old is not None and (old.__module__, old.__qualname__) != (effect_cls.__module__, effect_cls.__qualname__):
+        raise InputError("effect name", name, f"a name not yet taken (by {old.__module__}.{old.__qualname__})")
+    _REGISTRY[name] = effect_cls
+    return effect_cls
+
+
+def unregister(name: str) -> None:
+    """Remove an effect from the registry (tests, or reloading a user's plugin)."""
+    _REGISTRY.pop(name, None)
+
+
+def get(name: str) -> type[Effect]:
+    """The effect class registered under ``name``."""
+    if name not in _REGISTRY:
+        raise InputError("effects.name", name, f"one of: {', '.join(names())}")
+    return _REGISTRY[name]
+
+
+def names() -> list[str]:
+    """All registered effect names, sorted."""
+    return sorted(_REGISTRY)
+
+
+def load_plugin(path: str | Path) -> list[str]:
+    """Import a user's Python file so that its ``@register`` effects join the registry.
+
+    Returns the names that the file added.
+    """
+    p = Path(path)
+    if not p.is_file() or p.suffix != ".py":
+        raise InputError("plugin", str(p), "an existing .py file")
+    before = set(_REGISTRY)
+    mod_name = f"gearpit_plugin_{p.stem}_{abs(hash(str(p.resolve()))) % 10**8}"
+    spec = importlib.util.spec_from_file_location(mod_name, p)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[mod_name] = module
+    spec.loader.exec_module(module)
+    return sorted(set(_REGISTRY) - before)
+
+
+# ---------------------------------------------------------------------- specs (file / CLI boundary)
+@dataclass(frozen=True)
+class EffectSpec:
+    """An effect by name plus parameters, as read from a case file or the command line.
+
+    Parameters
+    ----------
+    name : str
+        Registered effect name.
+    params : tuple of (str, value)
+        Parameter overrides (SI units, names as the dataclass fields).
+    """
+
+    name: str
+    params: tuple = ()
+
+    @classmethod
+    def from_dict(cls, d: dict, where: str = "effects") -> "EffectSpec":
+        """From a TOML table ``{name = "noise", snr_db = 30.0}``; unknown names/keys raise."""
+        if not isinstance(d, dict) or "name" not in d:
+            raise InputError(where, d, "a table with a 'name' key")
+        effect_cls = get(d["name"])
+        allowed = {f.name for f in fields(effect_cls)}
+        for key in d:
+            if key != "name" and key not in allowed:
+                raise InputError(f"{where}.{d['name']}.{key}", d[key],
+                                 f"a parameter of {d['name']}: {', '.join(sorted(allowed)) or '(none)'}")
+        spec = cls(name=d["name"], params=tuple(sorted((k, v) for k, v in d.items() if k != "name")))
+        spec.build()  # validate now, before any work
+        return spec
+
+    @classmethod
+    def from_string(cls, text: str) -> "EffectSpec":
+        """From the CLI form ``name:key=value,key=value`` (values parsed as numbers when they can be)."""
+        name, _, rest = text.partition(":")
+        d: dict[str, Any] = {"name": name.strip()}
+        for item in filter(None, (s.strip() for s in rest.split(","))):
+            key, eq, val = item.partition("=")
+            if not eq:
+                raise InputError("effect", text, "name:key=value,key=value")
+            try:
+                d[key.strip()] = float(val) if any(c in val for c in ".eE") else int(val)
+            except ValueError:
+                d[key.strip()] = val.strip()
+        return cls.from_dict(d, where="effect")
+
+    def build(self) -> Effect:
+        """The effect instance (validates the parameters against their bounds)."""
+        effect_cls = get(self.name)
+        params = dict(self.params)
+        for f in fields(effect_cls):  # ints from TOML for float fields are fine
+            if f.name in params and f.type in ("float", float) and isinstance(params[f.name], int) \
+                    and not isinstance(params[f.name], bool):
+                params[f.name] = float(params[f.name])
+        return effect_cls(**params)
+
+
+def build_effects(items) -> tuple[Effect, ...]:
+    """Effects from a sequence of :class:`Effect`, :class:`EffectSpec` or dicts; at most one nonlinear mesh law."""
+    out = []
+    for i, item in enumerate(items or ()):
+        if isinstance(item, Effect):
+            out.append(item)
+        elif isinstance(item, EffectSpec):
+            out.append(item.build())
+        elif isinstance(item, dict):
+            out.append(EffectSpec.from_dict(item, where=f"effects[{i}]").build())
+        else:
+            raise InputError(f"effects[{i}]", item, "an Effect, EffectSpec or {name = ..., ...} table")
+    if sum(e.is_nonlinear for e in out) > 1:
+        raise InputError("effects", [e.name for e in out if e.is_nonlinear], "at most one nonlinear mesh law")
+    return tuple(out)
+
+
+__all__ = ["Effect", "EffectContext", "EffectSpec", "MeshState", "HOOKS", "register", "unregister", "get", "names",
+           "load_plugin", "build_effects"]

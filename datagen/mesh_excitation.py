@@ -1,0 +1,156 @@
+"""The periodic mesh record a simulation reads: stiffness, error force and per-pair data.
+
+From a :class:`datagen.stiffness.MeshStiffness` and the case's effects
+(hook 1 modifies the stiffness, hooks 2a/2b give deviations), build one record
+over ``period_cycles`` mesh cycles (the least common multiple of the stiffness
+period and of every effect's ``deviation_period_cycles``, then reduced to the
+smallest period the samples actually have: 1 cycle for a healthy pair):
+
+- ``k`` (N/m): total mesh stiffness;
+- ``error_force`` E (N) = sum over slices of ``k_slice * e``, so the linear mesh
+  force is ``k delta - E``;
+- ``k_slots`` (N/m) and ``e_slots`` (m): each tooth pair's stiffness and its
+  stiffness-weighted mean deviation, for per-pair nonlinear laws (contact loss).
+
+:class:`MeshRecords` concatenates the records of a batch of cases and looks
+them up at arbitrary mesh positions, vectorised over the cases.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True, eq=False)
+class MeshRecord:
+    """One case's periodic mesh record on a uniform mesh-position grid (module docstring)."""
+
+    period_cycles: int
+    positions_per_cycle: int
+    k: np.ndarray
+    error_force: np.ndarray
+    k_slots: np.ndarray
+    e_slots: np.ndarray
+
+    @property
+    def n_pos(self) -> int:
+        return self.k.size
+
+    @property
+    def has_error(self) -> bool:
+        return bool(np.any(self.error_force != 0))
+
+    def distinct_cycles(self) -> int:
+        """Number of different mesh cycles in the record (1 for a healthy pair; P when every cycle differs)."""
+        P, ppc = self.period_cycles, self.positions_per_cycle
+        k = self.k.reshape(P, ppc) / np.abs(self.k).max()
+        e = self.error_force.reshape(P, ppc) / max(np.abs(self.error_force).max(), 1e-300)
+        return int(np.unique(np.round(np.hstack([k, e]), 10), axis=0).shape[0])
+
+    def at(self, x_cycles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Stiffness and error force at mesh positions (periodic linear interpolation)."""
+        i0, f = _grid_index(np.asarray(x_cycles, float), self.positions_per_cycle, self.n_pos)
+        i1 = (i0 + 1) % self.n_pos
+        return (self.k[i0] * (1 - f) + self.k[i1] * f, self.error_force[i0] * (1 - f) + self.error_force[i1] * f)
+
+
+def _grid_index(x, ppc, n):
+    p = np.mod(x * ppc, n)
+    i0 = np.floor(p).astype(np.int64)
+    f = p - i0
+    return i0 % n, f
+
+
+def mesh_record(stiffness, effects, ctx) -> MeshRecord:
+    """Apply hooks 1 and 2 of ``effects`` to ``stiffness`` and build the periodic record."""
+    for e in effects:
+        if "mesh_stiffness" in e.hooks():
+            stiffness = e.mesh_stiffness(stiffness, ctx)
+    pair = stiffness.pair
+    z1, z2 = pair.pinion.teeth, pair.wheel.teeth
+    P0, ppc = stiffness.period_cycles, stiffness.positions_per_cycle
+    tooth_fx = [e for e in effects if "tooth_deviation_m" in e.hooks()]
+    angle_fx = [e for e in effects if "angle_deviation_m" in e.hooks()]
+    P = P0
+    for e in tooth_fx + angle_fx:
+        P = math.lcm(P, int(e.deviation_period_cycles(ctx)))
+    tiles = P // P0
+    k_slots = np.tile(stiffness.k_slots_n_per_m, (tiles, 1))
+    e_force_slots = np.zeros_like(k_slots)
+    n0 = stiffness.k_n_per_m.size
+    for j in range(tiles if tooth_fx else 0):
+        shift = j * P0
+
+        def f(g, pt, wt, shift=shift):
+            pt2, wt2 = (pt + shift) % z1, (wt + shift) % z2
+            return sum(e.tooth_deviation_m(g, pt2, wt2, ctx) for e in tooth_fx)
+
+        e_force_slots[j * n0:(j + 1) * n0] = stiffness.weighted(f)
+    if angle_fx:
+        x = np.arange(P * ppc) / ppc
+        th1, th2 = 2 * np.pi * x / z1, 2 * np.pi * x / z2
+        e_ang = sum(np.asarray(e.angle_deviation_m(th1, th2, ctx), float) for e in angle_fx)
+        e_force_slots = e_force_slots + k_slots * e_ang[:, None]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        e_slots = np.where(k_slots > 0, e_force_slots / k_slots, 0.0)
+    k, E = k_slots.sum(axis=1), e_force_slots.sum(axis=1)
+    P_min = minimal_period(P, ppc, k, E)
+    n = P_min * ppc
+    return MeshRecord(period_cycles=P_min, positions_per_cycle=ppc, k=k[:n], error_force=E[:n], k_slots=k_slots[:n],
+                      e_slots=e_slots[:n])
+
+
+def minimal_period(P: int, ppc: int, *arrays: np.ndarray, rtol: float = 1e-12) -> int:
+    """Smallest divisor ``d`` of ``P`` such that every array (P * ppc samples) repeats after ``d`` cycles.
+
+    A healthy pair's record repeats every mesh cycle: its steady state then needs
+    one mesh period, not one revolution.
+    """
+    for d in range(1, P + 1):
+        if P % d:
+            continue
+        if all(np.allclose(a.reshape(P // d, d * ppc), a[None, :d * ppc], rtol=rtol,
+                           atol=rtol * max(float(np.abs(a).max()), 1e-300)) for a in arrays):
+            return d
+    return P
+
+
+class MeshRecords:
+    """The records of a batch of cases, concatenated for vectorised lookup."""
+
+    def __init__(self, records: list[MeshRecord]):
+        self.records = records
+        self.n = np.array([r.n_pos for r in records], dtype=np.int64)
+        self.ppc = np.array([r.positions_per_cycle for r in records], dtype=float)
+        self.offset = np.concatenate([[0], np.cumsum(self.n)[:-1]]).astype(np.int64)
+        self.k = np.concatenate([r.k for r in records])
+        self.error_force = np.concatenate([r.error_force for r in records])
+        n_slots = max(r.k_slots.shape[1] for r in records)
+        pad = [np.pad(r.k_slots, ((0, 0), (0, n_slots - r.k_slots.shape[1]))) for r in records]
+        self.k_slots = np.concatenate(pad)
+        pad = [np.pad(r.e_slots, ((0, 0), (0, n_slots - r.e_slots.shape[1]))) for r in records]
+        self.e_slots = np.concatenate(pad)
+        self.has_error = any(r.has_error for r in records)
+
+    def _index(self, x_cycles):
+        p = np.mod(x_cycles * self.ppc, self.n)
+        i0 = np.floor(p).astype(np.int64)
+        f = p - i0
+        i0 = np.minimum(i0, self.n - 1)
+        i1 = np.where(i0 + 1 == self.n, 0, i0 + 1)
+        return i0 + self.offset, i1 + self.offset, f
+
+    def at(self, x_cycles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Stiffness and error force per case at positions ``x_cycles`` (shape (..., C))."""
+        a, b, f = self._index(x_cycles)
+        k = self.k[a] * (1 - f) + self.k[b] * f
+        e = self.error_force[a] * (1 - f) + self.error_force[b] * f if self.has_error else np.zeros_like(k)
+        return k, e
+
+    def slots_at(self, x_cycles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Per-pair stiffness and deviation (C, S) at positions ``x_cycles`` (C,)."""
+        a, b, f = self._index(x_cycles)
+        f = f[:, None]
+        return (self.k_slots[a] * (1 - f) + self.k_slots[b] * f, self.e_slots[a] * (1 - f) + self.e_slots[b] * f)

@@ -1,0 +1,77 @@
+"""Output channels of a simulation, from Newmark states: names, values, tacho pulses.
+
+Channel names carry their unit. Per case: housing/bearing accelerations along the line of action
+(``acc_*_loa_m_s2``; axial too for helical pairs), bearing forces (``force_bearing_*_n``), dynamic
+transmission error ``dte_m = rb1 phi1 - rb2 phi2``, mesh deflection ``mesh_deflection_m = v . q``,
+mesh force, shaft speeds, and the once-per-revolution ``tacho_*`` pulses (from the actual shaft
+angles). ``_phi_*`` are internal (for the tacho) and dropped from the output.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+def channel_names(n: int) -> list[str]:
+    names = ["acc_pinion_loa_m_s2", "acc_wheel_loa_m_s2", "force_bearing_pinion_loa_n", "force_bearing_wheel_loa_n"]
+    if n == 8:
+        names += ["acc_pinion_axial_m_s2", "acc_wheel_axial_m_s2", "force_bearing_pinion_axial_n",
+                  "force_bearing_wheel_axial_n"]
+    return names + ["dte_m", "mesh_deflection_m", "mesh_force_n", "speed_pinion_rpm", "speed_wheel_rpm", "_phi_1",
+                    "_phi_2"]
+
+
+def channel_coefficients(cases) -> dict:
+    m0 = cases[0].model
+    n = m0.n
+    ix = {d: i for i, d in enumerate(m0.dofs)}
+    co = {"ix": ix, "n": n}
+    for d in ("y_1", "y_2", "z_1", "z_2"):
+        if d in ix:
+            co[f"k_{d}"] = np.array([c.model.K_s[ix[d], ix[d]] for c in cases])
+            co[f"c_{d}"] = np.array([c.model.C_s[ix[d], ix[d]] for c in cases])
+    co["rb1"] = np.array([c.model.pair.base_radius_m("pinion") for c in cases])
+    co["rb2"] = np.array([c.model.pair.base_radius_m("wheel") for c in cases])
+    co["gear_ratio"] = np.array([c.model.ratio[ix["phi_2"]] for c in cases])
+    co["v"] = np.stack([c.model.v for c in cases])
+    return co
+
+
+def channel_values(traj: np.ndarray, force: np.ndarray, omega: np.ndarray, co: dict) -> np.ndarray:
+    """Fine-rate channels (C, n_ch, L) from states (C, 3n, L), mesh force (C, L) and pinion reference
+    speed (rad/s, broadcastable to (C, L))."""
+    n, ix = co["n"], co["ix"]
+    q, qd, qdd = traj[:, :n], traj[:, n:2 * n], traj[:, 2 * n:]
+
+    def c(name):
+        return co[name][:, None]
+
+    cols = [qdd[:, ix["y_1"]], qdd[:, ix["y_2"]],
+            c("k_y_1") * q[:, ix["y_1"]] + c("c_y_1") * qd[:, ix["y_1"]],
+            c("k_y_2") * q[:, ix["y_2"]] + c("c_y_2") * qd[:, ix["y_2"]]]
+    if n == 8:
+        cols += [qdd[:, ix["z_1"]], qdd[:, ix["z_2"]],
+                 c("k_z_1") * q[:, ix["z_1"]] + c("c_z_1") * qd[:, ix["z_1"]],
+                 c("k_z_2") * q[:, ix["z_2"]] + c("c_z_2") * qd[:, ix["z_2"]]]
+    rpm = 60.0 / (2 * np.pi)
+    cols += [c("rb1") * q[:, ix["phi_1"]] - c("rb2") * q[:, ix["phi_2"]], np.einsum("cil,ci->cl", q, co["v"]), force,
+             (omega + qd[:, ix["phi_1"]]) * rpm, (omega * c("gear_ratio") + qd[:, ix["phi_2"]]) * rpm,
+             q[:, ix["phi_1"]], q[:, ix["phi_2"]]]
+    return np.stack(cols, axis=1)
+
+
+def tacho(theta: np.ndarray) -> np.ndarray:
+    """Once-per-revolution pulse: 1 at the first sample on or after each whole turn, else 0."""
+    turns = np.floor(theta / (2 * np.pi))
+    pulse = np.zeros_like(theta)
+    pulse[1:] = (turns[1:] > turns[:-1]).astype(float)
+    return pulse
+
+
+def finish(values: np.ndarray, names: list[str], theta1: np.ndarray, ratio: float) -> dict:
+    """Per-case dict of output channels (rows of ``values``, (n_ch, n_out)) incl. tacho pulses;
+    internal ``_phi`` channels dropped."""
+    ch = {nm: values[j] for j, nm in enumerate(names) if not nm.startswith("_")}
+    th1 = theta1 + values[names.index("_phi_1")]
+    th2 = theta1 * ratio + values[names.index("_phi_2")]
+    ch["tacho_pinion"] = tacho(th1)
+    ch["tacho_wheel"] = tacho(th2)
+    return ch

@@ -1,0 +1,438 @@
+"""Dataset sweep configuration: what to generate, read from TOML and checked before any work.
+
+A sweep is the cross product of gear pairs x severity bins x pitted-teeth
+classes x pit shape families (the *class grid*, :func:`class_grid`), with
+``samples_per_class`` samples in every class, and per-sample ranges for the
+operating point, the pit details and the nuisance physics (effects and drive
+train). Every range is drawn per sample by :mod:`datagen.sampling`.
+
+TOML layout (units in key names; every table and key is checked, unknown keys
+are errors)::
+
+    [sweep]
+    name = "small"
+    seed = 7
+    samples_per_class = 4
+    shard_size = 16                     # samples per stored shard (and per simulate batch)
+    fs_hz = 12800.0
+    duration_s = 1.0
+    pairs = ["spur-gds"]                # preset names or {preset = ..., ...} tables
+    channels = ["acc_pinion_loa_m_s2"]  # stored signal channels
+
+    [classes]
+    shapes = ["ellipse", "rectangle", "cluster"]
+    teeth = ["0", "1", "2", "3+"]       # "k" exactly k teeth, "k+" k .. max_pitted_teeth
+    max_pitted_teeth = 4
+    [classes.severity_bins]             # pitted fraction of one flank, [min, max)
+    healthy = [0.0, 0.0]                # the healthy bin: exactly [0, 0]
+    minor = [0.02, 0.08]
+    moderate = [0.08, 0.16]
+    severe = [0.16, 0.30]
+
+    [pits]
+    gear = "pinion"
+    grid_px = [73, 200]                 # flank pixels (profile x face)
+    depth_mm = [0.1, 0.3]
+    aspect_w_to_s = [2.0, 6.0]          # optional (default: the flank's proportions)
+    profiles = ["flat", "bowl"]
+
+    [operating]
+    speed_rpm = [600.0, 1800.0]
+    torque_nm = [20.0, 100.0]
+
+    [effects.noise]                     # any registered effect; its field names (SI)
+    snr_db = [10.0, 40.0]
+    [effects.transmission_path]
+    housing_frequency_hz = [2000.0, 6000.0]
+
+    [drive_train]                       # fields of datagen.lumped_model.DriveTrain
+    mesh_damping_ratio = [0.03, 0.10]
+
+A value is fixed (``x``), a uniform range (``[lo, hi]``, integers for integer
+fields), a set of levels drawn with equal probability (``{choices = [600.0,
+1200.0, 1800.0]}``) or, for string options, a list of choices (``["a", "b"]``).
+Discrete speed levels are also faster: the simulator batches cases that share
+a time grid, i.e. a speed (:func:`datagen.dynamics.solve`).
+
+Severity semantics: every pitted tooth of a sample gets its own severity,
+drawn uniformly in ``[min + 1.1 tol, max - 1.1 tol]`` of its bin (``tol`` = the pit
+generator's severity tolerance), so the *achieved* severity of every tooth,
+and hence the sample's ``severity`` (max over its pitted teeth), lies in
+``[min, max)`` of the labelled bin.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, fields
+from pathlib import Path
+
+from datagen.draws import Draw, is_int, read_draw, read_int, read_names, read_number
+from datagen.geometry import GearPair, pair_from_dict, preset
+from datagen.lumped_model import DriveTrain
+from datagen.pits import DEPTH_PROFILES, SHAPES, default_tolerance, max_severity
+from gearpit.errors import require
+from gearpit.tomlio import check_keys, read_toml
+
+#: bump when the stored layout or the sampling rules change (recorded in metadata.json)
+FORMAT_VERSION = 1
+
+_TOP = {"sweep", "classes", "pits", "operating", "effects", "drive_train"}
+_SWEEP = {"name", "seed", "samples_per_class", "shard_size", "fs_hz", "duration_s", "pairs", "channels"}
+_CLASSES = {"shapes", "teeth", "max_pitted_teeth", "severity_bins"}
+_PITS = {"gear", "grid_px", "depth_mm", "aspect_w_to_s", "profiles", "tolerance"}
+_OPERATING = {"speed_rpm", "torque_nm"}
+#: signal channels a simulation produces (datagen.simulate.Signals; axial ones for helical pairs only)
+CHANNELS = ("acc_pinion_loa_m_s2", "acc_wheel_loa_m_s2", "force_bearing_pinion_loa_n", "force_bearing_wheel_loa_n",
+            "acc_pinion_axial_m_s2", "acc_wheel_axial_m_s2", "force_bearing_pinion_axial_n",
+            "force_bearing_wheel_axial_n", "dte_m", "mesh_force_n", "speed_pinion_rpm", "speed_wheel_rpm",
+            "tacho_pinion", "tacho_wheel")
+HEALTHY_SHAPE = "none"
+
+
+@dataclass(frozen=True)
+class SeverityBin:
+    """A named severity class: pitted flank fraction in ``[min_fraction, max_fraction)``; ``[0, 0]`` = healthy."""
+
+    name: str
+    min_fraction: float
+    max_fraction: float
+
+    @property
+    def healthy(self) -> bool:
+        return self.max_fraction == 0.0
+
+    def contains(self, severity: float) -> bool:
+        if self.healthy:
+            return severity == 0.0
+        return self.min_fraction <= severity < self.max_fraction
+
+
+@dataclass(frozen=True)
+class TeethClass:
+    """Number of pitted teeth: ``"k"`` (exactly k) or ``"k+"`` (k .. max_pitted_teeth)."""
+
+    name: str
+    low: int
+    high: int
+
+
+@dataclass(frozen=True)
+class ClassKey:
+    """One cell of the class grid."""
+
+    pair: str
+    severity_class: str
+    teeth_class: str
+    shape: str
+
+    @property
+    def label(self) -> str:
+        return f"{self.pair}/{self.severity_class}/{self.teeth_class}/{self.shape}"
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """A validated sweep (see the module docstring for the TOML form; SI units)."""
+
+    name: str
+    seed: int
+    samples_per_class: int
+    shard_size: int
+    fs_hz: float
+    duration_s: float
+    pairs: tuple[GearPair, ...]
+    channels: tuple[str, ...]
+    shapes: tuple[str, ...]
+    severity_bins: tuple[SeverityBin, ...]
+    teeth_classes: tuple[TeethClass, ...]
+    gear: str
+    grid_px: tuple[int, int]
+    tolerance: float | None
+    depth_m: Draw
+    aspect_w_to_s: Draw | None
+    profile: Draw
+    speed_rpm: Draw
+    torque_nm: Draw
+    effects: tuple[tuple[str, tuple[Draw, ...]], ...]
+    drive_train: tuple[Draw, ...]
+    source: Mapping  # the TOML document as read (recorded in metadata.json)
+
+    @property
+    def n_time(self) -> int:
+        return int(round(self.fs_hz * self.duration_s))
+
+    @property
+    def n_samples(self) -> int:
+        return len(class_grid(self)) * self.samples_per_class
+
+    @property
+    def n_shards(self) -> int:
+        return -(-self.n_samples // self.shard_size)
+
+    def pair(self, name: str) -> GearPair:
+        return next(p for p in self.pairs if p.name == name)
+
+    def tolerance_for(self, pair: GearPair) -> float:
+        """Severity tolerance of the pit generator on this pair's flank grid."""
+        return self.tolerance if self.tolerance is not None else default_tolerance(self.flank_grid(pair))
+
+    def flank_grid(self, pair: GearPair):
+        return pair.flank_grid(self.gear, *self.grid_px)
+
+    @property
+    def fingerprint(self) -> str:
+        """sha256 of the canonical JSON of the TOML document and the format version."""
+        text = json.dumps({"format_version": FORMAT_VERSION, "config": self.source}, sort_keys=True)
+        return hashlib.sha256(text.encode()).hexdigest()
+
+
+def class_grid(sweep: Sweep) -> list[ClassKey]:
+    """All classes, in a fixed order: per pair, the healthy class first, then bin x teeth x shape."""
+    out = []
+    for pair in sweep.pairs:
+        for b in sweep.severity_bins:
+            if b.healthy:
+                out.append(ClassKey(pair.name, b.name, "0", HEALTHY_SHAPE))
+                continue
+            for tc in sweep.teeth_classes:
+                if tc.high == 0:
+                    continue
+                for shape in sweep.shapes:
+                    out.append(ClassKey(pair.name, b.name, tc.name, shape))
+    return out
+
+
+# ---------------------------------------------------------------------- reading
+def load_sweep(path: str | Path) -> Sweep:
+    """Read and validate a sweep TOML file (raises :class:`InputError` on anything wrong)."""
+    return sweep_from_dict(read_toml(path))
+
+
+def sweep_from_dict(doc: Mapping) -> Sweep:
+    """Validate a sweep document (the parsed TOML) and build the :class:`Sweep`."""
+    require(isinstance(doc, Mapping), "sweep file", type(doc).__name__, "a TOML document")
+    check_keys(dict(doc), _TOP, "", required={"sweep", "classes", "operating"})
+    sw = _table(doc, "sweep")
+    check_keys(sw, _SWEEP, "sweep", required={"seed", "samples_per_class", "fs_hz", "duration_s", "pairs"})
+    seed = read_int(sw, "seed", "sweep", 0)
+    n_per = read_int(sw, "samples_per_class", "sweep", 1)
+    shard = read_int(sw, "shard_size", "sweep", 1) if "shard_size" in sw else 32
+    fs = read_number(sw["fs_hz"], "sweep.fs_hz", positive=True)
+    dur = read_number(sw["duration_s"], "sweep.duration_s", positive=True)
+    require(round(fs * dur) >= 16, "sweep.duration_s", dur, f"at least 16 samples at fs_hz = {fs:g}")
+    pairs = _pairs(sw["pairs"])
+    channels = read_names(sw.get("channels", ["acc_pinion_loa_m_s2"]), "sweep.channels", CHANNELS)
+
+    cl = _table(doc, "classes")
+    check_keys(cl, _CLASSES, "classes", required={"severity_bins"})
+    bins = _bins(cl["severity_bins"])
+    has_healthy = any(b.healthy for b in bins)
+    has_pitted = any(not b.healthy for b in bins)
+    shapes = read_names(cl.get("shapes", ["ellipse"]), "classes.shapes", SHAPES) if has_pitted else ()
+    pits = _table(doc, "pits") if "pits" in doc else {}
+    check_keys(pits, _PITS, "pits")
+    gear = pits.get("gear", "pinion")
+    require(gear in ("pinion", "wheel"), "pits.gear", gear, "one of: pinion, wheel")
+    z_min = min(p._gear(gear).teeth for p in pairs)
+    teeth = _teeth_classes(cl, has_healthy, has_pitted, z_min)
+
+    grid_px = pits.get("grid_px", [73, 200])
+    require(isinstance(grid_px, list) and len(grid_px) == 2 and all(is_int(v) and 8 <= v <= 4000 for v in grid_px),
+            "pits.grid_px", grid_px, "[n_profile, n_face], integers in [8, 4000]")
+    tol = None
+    if "tolerance" in pits:
+        tol = read_number(pits["tolerance"], "pits.tolerance", positive=True)
+        require(tol <= 0.05, "pits.tolerance", tol, "a number in (0, 0.05]")
+    depth = read_draw(pits.get("depth_mm", 0.2), "pits.depth_mm", "depth_m", "m", (1e-6, 5.0), scale=1e-3)
+    aspect = read_draw(pits["aspect_w_to_s"], "pits.aspect_w_to_s", "aspect_w_to_s", "-", (0.05, 50.0)) \
+        if "aspect_w_to_s" in pits else None
+    profile = read_draw(pits.get("profiles", ["flat"]), "pits.profiles", "profile", "-", choices=DEPTH_PROFILES)
+
+    op = _table(doc, "operating")
+    check_keys(op, _OPERATING, "operating", required=_OPERATING)
+    speed = read_draw(op["speed_rpm"], "operating.speed_rpm", "speed_rpm", "rpm", (1.0, 1e5))
+    torque = read_draw(op["torque_nm"], "operating.torque_nm", "torque_nm", "N m", (1e-3, 1e6))
+    effects = _effects(doc.get("effects", {}))
+    drive = _drive_train(doc.get("drive_train", {}))
+    name = sw.get("name", "sweep")
+    require(isinstance(name, str) and re.fullmatch(r"[A-Za-z0-9_.-]{1,64}", name) is not None, "sweep.name", name,
+            "1-64 letters, digits, '_', '.', '-'")
+    sweep = Sweep(name=name, seed=seed, samples_per_class=n_per, shard_size=shard, fs_hz=float(fs),
+                  duration_s=float(dur), pairs=pairs, channels=channels, shapes=shapes, severity_bins=bins,
+                  teeth_classes=teeth, gear=gear, grid_px=(int(grid_px[0]), int(grid_px[1])), tolerance=tol,
+                  depth_m=depth, aspect_w_to_s=aspect, profile=profile, speed_rpm=speed, torque_nm=torque,
+                  effects=effects, drive_train=drive, source=json.loads(json.dumps(doc)))
+    _check_feasible(sweep)
+    return sweep
+
+
+def _table(doc, key) -> dict:
+    v = doc[key]
+    require(isinstance(v, Mapping), key, v, "a table")
+    return dict(v)
+
+
+def _pairs(v) -> tuple[GearPair, ...]:
+    require(isinstance(v, list) and len(v) > 0, "sweep.pairs", v, "a non-empty list of preset names or pair tables")
+    out = []
+    for i, item in enumerate(v):
+        out.append(preset(item) if isinstance(item, str) else pair_from_dict(item, where=f"sweep.pairs[{i}]"))
+    names = [p.name for p in out]
+    require(len(set(names)) == len(names), "sweep.pairs", names, "pairs with distinct names (set name = ...)")
+    return tuple(out)
+
+
+def _bins(table) -> tuple[SeverityBin, ...]:
+    allowed = "a table name = [min_fraction, max_fraction] with 0 < min < max <= 1 (or [0, 0] for healthy)"
+    require(isinstance(table, Mapping) and len(table) > 0, "classes.severity_bins", table, allowed)
+    bins = []
+    for name, edges in table.items():
+        field = f"classes.severity_bins.{name}"
+        ok = isinstance(edges, list) and len(edges) == 2 and all(
+            isinstance(x, (int, float)) and not isinstance(x, bool) and 0 <= x <= 1 for x in edges)
+        require(ok, field, edges, allowed)
+        lo, hi = float(edges[0]), float(edges[1])
+        require((lo == hi == 0.0) or 0 < lo < hi, field, edges,
+                "[0, 0] (healthy) or 0 < min < max: this bin is empty" if lo >= hi else allowed)
+        bins.append(SeverityBin(name, lo, hi))
+    require(sum(b.healthy for b in bins) <= 1, "classes.severity_bins", [b.name for b in bins if b.healthy],
+            "at most one healthy bin [0, 0]")
+    pitted = [b for b in bins if not b.healthy]
+    for a, b in zip(pitted, pitted[1:]):
+        require(b.min_fraction >= a.max_fraction, f"classes.severity_bins.{b.name}",
+                [b.min_fraction, b.max_fraction],
+                f"bins sorted by severity and not overlapping: min >= {a.max_fraction:g} (max of '{a.name}')")
+    return tuple(bins)
+
+
+def _teeth_classes(cl, has_healthy, has_pitted, z_min) -> tuple[TeethClass, ...]:
+    names = cl.get("teeth", ["0", "1"] if has_healthy else ["1"])
+    require(isinstance(names, list) and len(names) > 0 and all(isinstance(n, str) for n in names), "classes.teeth",
+            names, 'a non-empty list of names like "0", "1", "2", "3+"')
+    max_t = cl.get("max_pitted_teeth")
+    if max_t is not None:
+        require(is_int(max_t) and 1 <= max_t <= z_min, "classes.max_pitted_teeth", max_t,
+                f"an integer in [1, {z_min}] (teeth of the pitted gear)")
+    out = []
+    for name in names:
+        m = re.fullmatch(r"(\d+)(\+?)", name)
+        require(m is not None, "classes.teeth", name, 'a count "k" or "k+" (k .. max_pitted_teeth)')
+        low = int(m.group(1))
+        if m.group(2):
+            require(max_t is not None, "classes.max_pitted_teeth", None,
+                    f'a value (needed by the teeth class "{name}")')
+            require(max_t >= low, "classes.max_pitted_teeth", max_t, f'>= {low} (teeth class "{name}" is empty)')
+            high = max_t
+        else:
+            high = low
+        require(high <= z_min, "classes.teeth", name, f"at most {z_min} teeth (the pitted gear's teeth)")
+        out.append(TeethClass(name, low, high))
+    for a, b in zip(out, out[1:]):
+        require(b.low > a.high, "classes.teeth", names, "increasing, non-overlapping counts")
+    has_zero = any(t.high == 0 for t in out)
+    require(has_zero == has_healthy, "classes.teeth", names,
+            'a "0" class exactly when there is a healthy severity bin [0, 0] (else that class is empty)')
+    require(not has_pitted or any(t.low > 0 for t in out), "classes.teeth", names,
+            "at least one class with pitted teeth (the pitted severity bins would be empty)")
+    return tuple(out)
+
+
+def _field_bounds(f) -> tuple:
+    return f.metadata.get("bounds", (-math.inf, math.inf))
+
+
+def _effects(table) -> tuple:
+    from datagen.effects import get
+
+    require(isinstance(table, Mapping), "effects", table, "a table of [effects.NAME] tables")
+    out = []
+    for name in sorted(table):
+        params = table[name]
+        require(isinstance(params, Mapping), f"effects.{name}", params, "a table of parameter values or ranges")
+        cls = get(name)
+        known = {f.name: f for f in fields(cls)}
+        check_keys(dict(params), set(known), f"effects.{name}")
+        draws = []
+        for key in sorted(params):
+            f = known[key]
+            where = f"effects.{name}.{key}"
+            if "choices" in f.metadata:
+                draws.append(read_draw(params[key], where, key, "-", choices=tuple(f.metadata["choices"])))
+            else:
+                draws.append(read_draw(params[key], where, key, f.metadata.get("unit", "-"), _field_bounds(f),
+                                   integer=f.type in ("int", int)))
+        out.append((name, tuple(draws)))
+    return tuple(out)
+
+
+#: unit of a DriveTrain field from its name's suffix (first match)
+_DRIVE_UNITS = (("_kg_m2", "kg m^2"), ("_nm_per_rad", "N m/rad"), ("_n_per_m", "N/m"), ("_hz", "Hz"),
+                ("_ratio", "-"), ("", "-"))
+
+
+def _drive_train(table) -> tuple[Draw, ...]:
+    require(isinstance(table, Mapping), "drive_train", table, "a table of DriveTrain fields")
+    known = {f.name: f for f in fields(DriveTrain)}
+    check_keys(dict(table), set(known), "drive_train")
+    out = []
+    for key in sorted(table):
+        bounds = (0.0, 2.0) if key.endswith("damping_ratio") else (1e-12, 1e15)
+        unit = next(u for suffix, u in _DRIVE_UNITS if key.endswith(suffix))
+        d = read_draw(table[key], f"drive_train.{key}", key, unit, bounds)
+        for v in d.span:  # DriveTrain's own checks, before any work
+            DriveTrain(**{key: v})
+        out.append(d)
+    return tuple(out)
+
+
+def _check_feasible(sweep: Sweep) -> None:
+    """Every severity bin must be reachable by every shape on every pair's flank grid."""
+    for pair in sweep.pairs:
+        grid = sweep.flank_grid(pair)
+        tol = sweep.tolerance_for(pair)
+        aspects = sweep.aspect_w_to_s.span if sweep.aspect_w_to_s is not None else (None,)
+        for b in sweep.severity_bins:
+            if b.healthy:
+                continue
+            where = f"classes.severity_bins.{b.name}"
+            require(b.max_fraction - b.min_fraction > 2.2 * tol, where, [b.min_fraction, b.max_fraction],
+                    f"a bin wider than 2.2 x the severity tolerance {tol:.4g} of the {sweep.grid_px[0]}x"
+                    f"{sweep.grid_px[1]} flank grid (labels must stay inside their bin); this bin is empty")
+            for shape in sweep.shapes:
+                top = min(max_severity(grid, shape, a) for a in aspects)
+                require(b.max_fraction - 1.1 * tol <= top, where, [b.min_fraction, b.max_fraction],
+                        f"severities a {shape} pit can reach on the {pair.name} {sweep.gear} flank "
+                        f"(<= {top:.4f} with this aspect ratio)")
+                if shape == "rectangle":
+                    _check_rectangle_resolution(grid, b, tol, aspects, where)
+    from datagen.effects import get
+    from datagen.simulate import Case, OperatingPoint
+
+    for name, draws in sweep.effects:
+        cls = get(name)
+        for d in draws:  # every corner value builds (bounds are checked by the effect itself)
+            for v in d.span:
+                cls(**{d.name: v})
+    for pair in sweep.pairs:  # the simulation's own checks (fs vs mesh frequency, duration >= 1 rev)
+        axial = [c for c in sweep.channels if "axial" in c]
+        require(pair.is_helical or not axial, "sweep.channels", axial, f"no axial channels (pair {pair.name} is spur)")
+        for speed in sweep.speed_rpm.span:
+            for torque in sweep.torque_nm.span:
+                Case(pair=pair, operating=OperatingPoint(speed, torque), duration_s=sweep.duration_s,
+                     fs_hz=sweep.fs_hz)
+
+
+def _check_rectangle_resolution(grid, b: SeverityBin, tol: float, aspects, where: str) -> None:
+    """A rectangle of whole pixels lands within ``tol`` when half its row count is <= tol * pixels."""
+    n_pix = grid.n_profile * grid.n_face
+    for a in aspects:
+        a = grid.face_width_m / grid.profile_length_m if a is None else a
+        rows = math.sqrt(b.max_fraction * n_pix * grid.pixel_area_m2 / a) / grid.ds_m
+        rows = min(grid.n_profile, math.ceil(rows))
+        require(rows / 2 <= tol * n_pix, where, [b.min_fraction, b.max_fraction],
+                f"a flank grid fine enough for rectangles within tolerance {tol:.4g} (need more face pixels "
+                f"than {grid.n_face} or a larger pits.tolerance)")

@@ -1,0 +1,71 @@
+"""``gearpit evaluate MODEL DATA``: score a trained model on labelled records.
+
+DATA is a generated dataset directory, a folder of labelled measurement files
+(sidecars + ``labels.csv``, see :mod:`models.sources`) or measurement files.
+Writes into ``--out`` (default ``MODEL/eval``): ``metrics.json`` and
+``metrics.md`` (accuracy, macro-F1, confusion matrices, severity MAE, breakdown
+per speed and load), ``predictions.csv``, ``confusion.png`` and ``breakdown.png``.
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from gearpit.errors import require
+
+
+def register(sub) -> None:
+    p = sub.add_parser("evaluate", help="score a model on a labelled dataset or measurements (JSON, MD, PNG)",
+                       description=__doc__)
+    p.add_argument("model", type=Path, metavar="MODEL", help="model directory (gearpit train)")
+    p.add_argument("data", type=Path, nargs="+", metavar="DATA", help="dataset directory, measurement folder or files")
+    p.add_argument("--out", type=Path, default=None, help="output directory (default MODEL/eval)")
+    p.add_argument("--channel", default=None, help="dataset channel (default: the model's training channel)")
+    p.add_argument("--pair", default=None, help="gear pair of the dataset to use (if it holds several)")
+    p.add_argument("--crops", type=int, default=3, help="test-time segments per record (CNN, default 3)")
+    p.add_argument("--allow-mismatch", action="store_true",
+                   help="warn instead of refusing a different sampling rate or gear pair where possible")
+    p.set_defaults(func=run)
+
+
+def predict_any(model, data, *, crops: int, allow_mismatch: bool):
+    """Predictions of a CNN or a feature baseline."""
+    from models.classifier import CNNClassifier
+
+    if isinstance(model, CNNClassifier):
+        return model.predict(data, n_crops=crops, allow_mismatch=allow_mismatch)
+    return model.predict(data, allow_mismatch=allow_mismatch)
+
+
+def resolve_channel(model, paths: list[Path], channel: str | None) -> str | None:
+    """The channel to read from a dataset: the flag, else the model's training channel if stored."""
+    if channel is not None or len(paths) != 1 or not (paths[0] / "metadata.json").is_file():
+        return channel
+    from datagen.dataset import read_metadata
+
+    stored = read_metadata(paths[0])["channels"]
+    return model.spec.channel if model.spec.channel in stored else None
+
+
+def run(args) -> int:
+    from models.evaluate import evaluate, report_markdown, write_report
+    from models.io import load_model
+    from models.plots import plot_breakdown, plot_confusions
+    from models.sources import load_data
+
+    require(args.crops >= 1, "--crops", args.crops, "an integer >= 1")
+    model = load_model(args.model)
+    data = load_data(args.data, channel=resolve_channel(model, args.data, args.channel), pair=args.pair)
+    require(data.has_labels(), "DATA", data.source, "labelled records (a severity_class label at least)")
+    pred = predict_any(model, data, crops=args.crops, allow_mismatch=args.allow_mismatch)
+    metrics = evaluate(data, pred)
+    metrics["model"] = str(args.model)
+    out = args.out if args.out is not None else args.model / "eval"
+    write_report(metrics, pred, data, out, title=f"Evaluation of {args.model.name} on {data.source}")
+    plot_confusions(metrics, out / "confusion.png")
+    plot_breakdown(metrics, out / "breakdown.png")
+    print(report_markdown(metrics).split("## Severity class confusion")[0].rstrip())
+    print(json.dumps({"accuracy": metrics["severity_class"]["accuracy"], "macro_f1": metrics["severity_class"]["macro_f1"],
+                      "teeth_accuracy": metrics.get("teeth", {}).get("accuracy"), "severity_mae": metrics.get("severity_mae"),
+                      "out": str(out)}))
+    return 0

@@ -1,0 +1,62 @@
+"""``gearpit predict MODEL FILES``: classify unlabelled measurements.
+
+FILES are measurement files with sidecars (:mod:`compare.measurement`), a folder
+of them, or a generated dataset directory. For every record prints the
+predicted severity class with its probability (the confidence), the severity
+fraction and the pitted-teeth class, and a warning when the record lies outside
+what the model was trained on (speed, load or SNR outside the trained range;
+with ``--allow-mismatch``, a different sampling rate or gear pair). A different
+sampling rate, gear pair or a record too short is refused otherwise.
+"""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+from gearpit.errors import require
+
+
+def register(sub) -> None:
+    p = sub.add_parser("predict", help="classify unlabelled measurements with a trained model", description=__doc__)
+    p.add_argument("model", type=Path, metavar="MODEL", help="model directory (gearpit train)")
+    p.add_argument("files", type=Path, nargs="+", metavar="FILES", help="measurement files, a folder, or a dataset")
+    p.add_argument("--out", type=Path, default=None, help="also write the predictions to this CSV")
+    p.add_argument("--json", action="store_true", help="print one JSON object per record instead of a table")
+    p.add_argument("--channel", default=None, help="dataset channel (default: the model's training channel)")
+    p.add_argument("--crops", type=int, default=3, help="test-time segments per record (CNN, default 3)")
+    p.add_argument("--allow-mismatch", action="store_true",
+                   help="warn instead of refusing a different sampling rate or gear pair where possible")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from gearpit.atomic import atomic_path
+    from gearpit.commands.evaluate import predict_any, resolve_channel
+    from models.io import load_model
+    from models.sources import load_data
+
+    require(args.crops >= 1, "--crops", args.crops, "an integer >= 1")
+    model = load_model(args.model)
+    data = load_data(args.files, channel=resolve_channel(model, args.files, args.channel))
+    pred = predict_any(model, data, crops=args.crops, allow_mismatch=args.allow_mismatch)
+    table = pred.to_frame()
+    names = data.labels["file"] if "file" in data.labels else data.labels.get("sample_index", table.index)
+    table.insert(0, "record", [str(v) for v in names])
+    if args.out is not None:
+        with atomic_path(args.out) as tmp:
+            table.to_csv(tmp, index=False)
+    if args.json:
+        for row in table.to_dict(orient="records"):
+            print(json.dumps(row))
+    else:
+        cols = ["record", "severity_class", "confidence", "severity", "teeth_class", "teeth_confidence"]
+        print(table[cols].to_string(index=False, float_format=lambda v: f"{v:.3f}"))
+    n_warn = int((table["warning"] != "").sum())
+    for rec, w in zip(table["record"], table["warning"]):
+        if w:
+            print(f"warning: {rec}: {w}", file=sys.stderr)
+    if n_warn:
+        print(f"warning: {n_warn} of {len(table)} records outside the trained conditions; treat them with care",
+              file=sys.stderr)
+    return 0

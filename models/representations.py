@@ -1,0 +1,320 @@
+"""Input representations of vibration records for the classifiers.
+
+Every representation cuts one *segment* out of a record (where it starts is a
+fraction of the free room, so a random start is the "random phase / crop"
+augmentation and evenly spaced starts are test-time crops), normalises it per
+signal (zero mean, unit standard deviation) and returns a fixed-size array
+``(channels, length)``:
+
+``raw``
+    the segment itself, ``n_samples`` samples (bound to the sampling rate).
+``envelope``
+    log amplitude spectrum of the segment's envelope, first ``n_samples // 8``
+    bins, i.e. 0 to ``fs / 16`` (bound to the sampling rate).
+``tsa``
+    two channels of ``samples_per_rev`` samples: the time-synchronous average of
+    the pinion over ``n_revs`` revolutions (the FFT bins of an ``n_revs``-revolution
+    segment at integer shaft orders, i.e. the TSA comb filter [1]_, back to the
+    angle domain), and its *difference signal*: the same without shaft orders
+    0-2 and without the mesh harmonics ``m z`` and their first sidebands
+    ``m z +/- 1`` [3]_, where a local tooth fault stands out.
+``order``
+    two channels, log order spectrum and log envelope order spectrum of an
+    ``n_revs``-revolution segment, on the grid ``k / n_revs`` pinion shaft orders
+    up to ``max_order``. Independent of the speed and of the sampling rate [2]_.
+``mesh_order``
+    as ``order`` but on a grid of *mesh* orders (frequency over mesh frequency,
+    ``n_mesh_periods`` mesh periods per segment, up to ``max_order`` mesh orders).
+    Needs only the mesh frequency in cycles per sample, which can be estimated
+    from a record whose sampling rate and tooth counts are unknown.
+
+Spectra are window-corrected Hann amplitude spectra, linearly interpolated from
+the FFT bins onto the order grid (the segment holds a whole number of
+revolutions up to rounding to a sample, so bins and grid nearly coincide),
+compressed by ``log10(a + 1e-5)`` and standardised per signal and channel.
+
+A *speed factor* ``s`` mimics a speed error: the order-domain representations
+assume the shaft turned at ``s`` times the given speed; ``raw`` and ``envelope``
+take ``s * n_samples`` samples and resample them (FFT) to ``n_samples``, as if the
+machine had run ``s`` times faster.
+
+References
+----------
+.. [1] McFadden, P. D. (1987). A revised model for the extraction of periodic
+   waveforms by time domain averaging. Mechanical Systems and Signal Processing
+   1(1), 83-95.
+.. [2] Randall, R. B. (2011). Vibration-based Condition Monitoring. Wiley,
+   sections 3.6 (order tracking) and 5.3 (envelope analysis).
+.. [3] Lebold, M. et al. (2000). Review of vibration analysis methods for gearbox
+   diagnostics and prognostics. Proc. 54th MFPT, 623-634 (regular, residual and
+   difference signals).
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, fields
+from typing import Literal
+
+import numpy as np
+from scipy.signal import resample
+
+from gearpit.errors import InputError, require, require_positive
+
+Kind = Literal["raw", "envelope", "tsa", "order", "mesh_order"]
+KINDS: tuple[str, ...] = ("raw", "envelope", "tsa", "order", "mesh_order")
+#: representations whose axis is tied to the sampling rate (input fs must equal the trained fs)
+FS_BOUND: tuple[str, ...] = ("raw", "envelope")
+LOG_FLOOR = 1e-5
+
+
+@dataclass(frozen=True)
+class RepresentationSpec:
+    """Which representation and its size.
+
+    Attributes
+    ----------
+    kind : {"raw", "envelope", "tsa", "order", "mesh_order"}
+    n_samples : int
+        Segment length (samples) of ``raw`` and ``envelope``.
+    n_revs : int
+        Pinion revolutions per segment of ``tsa`` and ``order``; the order
+        resolution is ``1 / n_revs``.
+    samples_per_rev : int
+        Samples per revolution of ``tsa`` (orders up to ``samples_per_rev / 2``).
+    max_order : float
+        Highest pinion shaft order (``order``) or mesh order (``mesh_order``) kept.
+    n_mesh_periods : int
+        Mesh periods per segment of ``mesh_order``.
+    """
+
+    kind: Kind = "order"
+    n_samples: int = 4096
+    n_revs: int = 8
+    samples_per_rev: int = 512
+    max_order: float = 100.0
+    n_mesh_periods: int = 256
+
+    def __post_init__(self):
+        require(self.kind in KINDS, "representation.kind", self.kind, "one of: " + ", ".join(KINDS))
+        for name, lo in (("n_samples", 64), ("n_revs", 1), ("samples_per_rev", 16), ("n_mesh_periods", 8)):
+            v = getattr(self, name)
+            require(isinstance(v, (int, np.integer)) and not isinstance(v, bool) and v >= lo,
+                    f"representation.{name}", v, f"an integer >= {lo}")
+        require_positive("representation.max_order", self.max_order)
+        require(self.samples_per_rev % 2 == 0, "representation.samples_per_rev", self.samples_per_rev, "an even integer")
+
+    @classmethod
+    def from_dict(cls, values: dict) -> "RepresentationSpec":
+        """Build from a mapping (TOML table, saved model); unknown keys are errors."""
+        known = {f.name for f in fields(cls)}
+        for key in values:
+            if key not in known:
+                raise InputError(f"representation.{key}", values[key], "one of: " + ", ".join(sorted(known)))
+        return cls(**values)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    @property
+    def n_channels(self) -> int:
+        """Input channels of the network."""
+        return 2 if self.kind in ("order", "mesh_order", "tsa") else 1
+
+    @property
+    def length(self) -> int:
+        """Length of one channel."""
+        if self.kind == "raw":
+            return self.n_samples
+        if self.kind == "envelope":
+            return self.n_samples // 8
+        if self.kind == "tsa":
+            return self.samples_per_rev
+        if self.kind == "order":
+            return int(np.floor(self.max_order * self.n_revs))
+        return int(np.floor(self.max_order * self.n_mesh_periods))
+
+    @property
+    def needs_speed(self) -> bool:
+        """True if the shaft speed (or the mesh frequency) must be known."""
+        return self.kind in ("tsa", "order", "mesh_order")
+
+    def segment_length(self, fs_hz: float, shaft_hz: float | None = None, mesh_cps: float | None = None,
+                       speed_factor: float = 1.0) -> int:
+        """Samples of record one segment takes (before any resampling)."""
+        if self.kind in ("raw", "envelope"):
+            return int(round(self.n_samples * speed_factor))
+        if self.kind in ("tsa", "order"):
+            return int(round(self.n_revs * fs_hz / (shaft_hz * speed_factor)))
+        return int(round(self.n_mesh_periods / (mesh_cps * speed_factor)))
+
+
+def _normalise(seg: np.ndarray) -> np.ndarray:
+    s = seg - seg.mean()
+    sd = s.std()
+    return s / sd if sd > 0 else s
+
+
+def _standardise(v: np.ndarray) -> np.ndarray:
+    sd = v.std()
+    return (v - v.mean()) / sd if sd > 0 else v - v.mean()
+
+
+def _hann_amplitude(seg: np.ndarray) -> np.ndarray:
+    w = np.hanning(seg.size + 1)[:-1]  # periodic Hann
+    return 2.0 * np.abs(np.fft.rfft(seg * w)) / w.sum()
+
+
+def _envelope(seg: np.ndarray) -> np.ndarray:
+    n = seg.size
+    spec = np.fft.fft(seg)
+    gain = np.zeros(n)
+    gain[0] = 1.0
+    gain[1:(n + 1) // 2] = 2.0
+    if n % 2 == 0:
+        gain[n // 2] = 1.0
+    e = np.abs(np.fft.ifft(spec * gain))
+    return e - e.mean()
+
+
+def _log_on_grid(amp: np.ndarray, bin_units: float, length: int, step: float) -> np.ndarray:
+    """Log amplitude interpolated from FFT bins (spacing ``bin_units``) onto ``k * step``, k < length."""
+    grid = np.arange(length) * step
+    src = np.arange(amp.size) * bin_units
+    return _standardise(np.log10(np.interp(grid, src, amp) + LOG_FLOOR))
+
+
+def _difference_mask(n_orders: int, z_pinion: int) -> np.ndarray:
+    """True for the orders kept in the difference signal (not 0-2, not ``m z + {-1, 0, 1}``)."""
+    k = np.arange(n_orders)
+    near_mesh = np.minimum(k % z_pinion, z_pinion - k % z_pinion) <= 1
+    return (k > 2) & ~near_mesh
+
+
+def _one(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, shaft_hz: float | None, mesh_cps: float | None,
+         start: float, speed_factor: float, z_pinion: int) -> np.ndarray:
+    n_seg = spec.segment_length(fs_hz, shaft_hz, mesh_cps, speed_factor)
+    room = x.size - n_seg
+    i0 = int(np.floor(start * room + 1e-9))
+    seg = _normalise(x[i0:i0 + n_seg].astype(float))
+    k = spec.kind
+    if k in ("raw", "envelope"):
+        if n_seg != spec.n_samples:
+            seg = _normalise(resample(seg, spec.n_samples))
+        if k == "raw":
+            return seg[None, :]
+        amp = _hann_amplitude(_envelope(seg))
+        return _standardise(np.log10(amp[:spec.length] + LOG_FLOOR))[None, :]
+    if k == "tsa":
+        # bin j of the segment is shaft order j / (revolutions it holds): keep the integer orders
+        spec_c = np.fft.rfft(seg)
+        n_rev_exact = n_seg * (shaft_hz * speed_factor) / fs_hz
+        bins = np.arange(spec.samples_per_rev // 2 + 1) * n_rev_exact
+        idx = np.arange(spec_c.size)
+        comb = np.interp(bins, idx, spec_c.real, right=0.0) + 1j * np.interp(bins, idx, spec_c.imag, right=0.0)
+        avg = np.fft.irfft(comb, n=spec.samples_per_rev)
+        diff = np.fft.irfft(comb * _difference_mask(comb.size, z_pinion), n=spec.samples_per_rev)
+        # both scaled by the TSA's standard deviation: the difference keeps its level relative to the mesh tone
+        sd = avg.std()
+        sd = sd if sd > 0 else 1.0
+        return np.stack([(avg - avg.mean()) / sd, (diff - diff.mean()) / sd])
+    if k == "order":
+        # bin j of the segment is shaft order j * (revolutions in the segment)^-1
+        unit = 1.0 / (n_seg * (shaft_hz * speed_factor) / fs_hz)
+        step = 1.0 / spec.n_revs
+    else:
+        unit = 1.0 / (n_seg * mesh_cps * speed_factor)
+        step = 1.0 / spec.n_mesh_periods
+    a = _log_on_grid(_hann_amplitude(seg), unit, spec.length, step)
+    e = _log_on_grid(_hann_amplitude(_envelope(seg)), unit, spec.length, step)
+    return np.stack([a, e])
+
+
+def _per_record(value, n: int, field: str) -> np.ndarray | None:
+    if value is None:
+        return None
+    arr = np.asarray(value, dtype=float)
+    if arr.ndim == 0:
+        arr = np.full(n, float(arr))
+    require(arr.shape == (n,), field, arr.shape, f"a scalar or {n} values (one per record)")
+    return arr
+
+
+def check_inputs(spec: RepresentationSpec, n_samples: int, fs_hz: float, shaft_hz=None, mesh_cps=None,
+                 *, z_pinion: int | None = None, max_speed_factor: float = 1.0) -> None:
+    """Raise :class:`InputError` unless records of ``n_samples`` samples can be represented.
+
+    Checks that the speed (or mesh frequency) is given when needed, that one
+    segment fits in the record at the slowest speed (times ``1 / max_speed_factor``
+    margin for the speed augmentation) and that the highest order kept lies below
+    the Nyquist frequency.
+    """
+    require_positive("fs_hz", float(fs_hz))
+    if spec.kind == "tsa":
+        require(z_pinion is not None and int(z_pinion) >= 3, "z_pinion", z_pinion,
+                "the pinion tooth count (representation 'tsa' removes the mesh harmonics)")
+    if spec.kind in ("tsa", "order"):
+        require(shaft_hz is not None, "speed_rpm", None, f"the pinion speed (representation {spec.kind!r} needs it)")
+        fr = np.atleast_1d(np.asarray(shaft_hz, dtype=float))
+        require(bool(np.all(np.isfinite(fr) & (fr > 0))), "speed_rpm", "non-positive", "speeds > 0")
+        slow = float(fr.min()) / max_speed_factor
+        need = spec.segment_length(fs_hz, slow)
+        require(need <= n_samples, "n_samples", n_samples,
+                f">= {need} samples: {spec.n_revs} revolutions at {slow * 60:.0f} rpm and {fs_hz:g} Hz")
+        # (tsa: orders above the Nyquist frequency are absent, i.e. zero)
+        fast = float(fr.max()) * max_speed_factor
+        require(spec.kind == "tsa" or spec.max_order * fast <= fs_hz / 2, "speed_rpm", round(fast * 60, 1),
+                f"<= {fs_hz / 2 / spec.max_order * 60:.0f} rpm so that order {spec.max_order:g} stays below "
+                f"Nyquist ({fs_hz / 2:g} Hz)")
+    elif spec.kind == "mesh_order":
+        require(mesh_cps is not None, "mesh_cycles_per_sample", None, "the mesh frequency (speed and tooth count)")
+        c = np.atleast_1d(np.asarray(mesh_cps, dtype=float))
+        require(bool(np.all(np.isfinite(c) & (c > 0))), "mesh_cycles_per_sample", "non-positive", "values > 0")
+        need = spec.segment_length(fs_hz, None, float(c.min()) / max_speed_factor)
+        require(need <= n_samples, "n_samples", n_samples,
+                f">= {need} samples ({spec.n_mesh_periods} mesh periods at {float(c.min()):.4f} cycles/sample)")
+        top = spec.max_order * float(c.max()) * max_speed_factor
+        require(top <= 0.5, "mesh_cycles_per_sample", round(float(c.max()), 5),
+                f"<= {0.5 / spec.max_order:.4f} so that mesh order {spec.max_order:g} stays below Nyquist")
+    else:
+        need = int(round(spec.n_samples * max_speed_factor))
+        require(need <= n_samples, "n_samples", n_samples, f">= {need} samples (segment of representation {spec.kind!r})")
+
+
+def represent(signals: np.ndarray, spec: RepresentationSpec, *, fs_hz: float, shaft_hz=None, mesh_cps=None,
+              z_pinion: int | None = None, starts=0.0, speed_factors=1.0) -> np.ndarray:
+    """Representation of every record: array ``(n_records, spec.n_channels, spec.length)``, float32.
+
+    Parameters
+    ----------
+    signals : array_like, shape (n_records, n_samples)
+        Records sampled at ``fs_hz``.
+    spec : RepresentationSpec
+    fs_hz : float
+        Sampling rate (Hz); for ``mesh_order`` any positive value (unused).
+    shaft_hz : float or array_like, optional
+        Pinion shaft frequency (Hz) per record (``tsa``, ``order``).
+    mesh_cps : float or array_like, optional
+        Mesh frequency in cycles per sample per record (``mesh_order``).
+    z_pinion : int, optional
+        Pinion tooth count (``tsa``).
+    starts : float or array_like
+        Where each segment starts, as a fraction in [0, 1] of the free room.
+    speed_factors : float or array_like
+        Speed error factors (see the module docstring); 1 = none.
+    """
+    x = np.asarray(signals)
+    require(x.ndim == 2 and x.shape[0] >= 1, "signals", x.shape, "a 2-D array (records, samples)")
+    n = x.shape[0]
+    fr = _per_record(shaft_hz, n, "shaft_hz")
+    mc = _per_record(mesh_cps, n, "mesh_cps")
+    st = _per_record(starts, n, "starts")
+    sf = _per_record(speed_factors, n, "speed_factors")
+    require(bool(np.all((st >= 0) & (st <= 1))), "starts", "outside [0, 1]", "fractions in [0, 1]")
+    require(bool(np.all(sf > 0)), "speed_factors", "non-positive", "factors > 0")
+    check_inputs(spec, x.shape[1], fs_hz, fr, mc, z_pinion=z_pinion,
+                 max_speed_factor=float(max(sf.max(), 1.0 / sf.min())))
+    out = np.empty((n, spec.n_channels, spec.length), dtype=np.float32)
+    z = int(z_pinion) if z_pinion is not None else 0
+    for i in range(n):
+        out[i] = _one(x[i], spec, float(fs_hz), None if fr is None else fr[i], None if mc is None else mc[i],
+                      float(st[i]), float(sf[i]), z)
+    return out

@@ -1,0 +1,167 @@
+"""Where labelled records come from: a generated dataset or measurement files.
+
+- :func:`load_dataset`: a dataset directory of :mod:`datagen.dataset` (one
+  channel, one gear pair, optionally a subset of rows);
+- :func:`load_measurements`: measurement files with sidecars
+  (:func:`compare.measurement.load_measurement`). Labels, when present, come from
+  a ``labels.csv`` beside the files (columns ``file``, ``severity_class`` and any of
+  ``severity``, ``n_pitted_teeth``, ``teeth_class``), else from the sidecar's
+  ``fault`` (``"healthy"`` -> severity 0, no pitted teeth; any other value -> that
+  class name, counts unknown). Records are cut to the shortest one;
+- :func:`load_data`: either of the two, by looking at the path.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from gearpit.errors import InputError, require
+from models.data import PairInfo, SignalSet, teeth_class_of
+
+LABELS_FILE = "labels.csv"
+MEASUREMENT_SUFFIXES = (".csv", ".txt", ".npy", ".npz", ".wav", ".mat")
+
+
+def load_dataset(path: str | Path, *, channel: str | None = None, pair: str | None = None,
+                 rows: np.ndarray | None = None) -> SignalSet:
+    """Records of one channel of a generated dataset.
+
+    Parameters
+    ----------
+    path : str or Path
+        Dataset directory (:mod:`datagen.dataset`).
+    channel : str, optional
+        Stored channel (default: the first stored one).
+    pair : str, optional
+        Gear pair name; required when the dataset holds several pairs.
+    rows : array of bool or int, optional
+        Subset of the index rows (mask or positions), e.g. from a query on the index.
+    """
+    from datagen.dataset import load_index, load_signals, read_metadata
+
+    root = Path(path)
+    meta = read_metadata(root)
+    index = load_index(root).reset_index(drop=True)
+    require(len(index) > 0, "DATASET", str(root), "a dataset with finished samples")
+    pairs = meta["pairs"]
+    if pair is None:
+        require(len(pairs) == 1, "pair", None, "one of: " + ", ".join(pairs) + " (the dataset holds several pairs)")
+        pair = next(iter(pairs))
+    require(pair in pairs, "pair", pair, "one of: " + ", ".join(pairs))
+    keep = (index["pair"] == pair).to_numpy() if "pair" in index else np.ones(len(index), bool)
+    if rows is not None:
+        r = np.asarray(rows)
+        sel = np.zeros(len(index), bool)
+        if r.dtype == bool:
+            require(r.size == len(index), "rows", r.size, f"a mask of {len(index)} rows")
+            sel = r
+        else:
+            sel[r] = True
+        keep &= sel
+    index = index[keep].reset_index(drop=True)
+    require(len(index) > 0, "rows", 0, "at least one record of the selection")
+    x = load_signals(root, index["sample_index"].to_numpy(), channel)
+    labels = index.copy()
+    if "teeth_class" not in labels and "n_pitted_teeth" in labels:
+        labels["teeth_class"] = teeth_class_of(labels["n_pitted_teeth"])
+    ch = channel if channel is not None else meta["channels"][0]
+    return SignalSet(x, float(meta["fs_hz"]), PairInfo(pair, int(pairs[pair]["z_pinion"]), int(pairs[pair]["z_wheel"])),
+                     labels, source=f"{root} [{ch}]", channel=ch)
+
+
+def _labels_table(folder: Path) -> pd.DataFrame | None:
+    f = folder / LABELS_FILE
+    if not f.is_file():
+        return None
+    table = pd.read_csv(f)
+    require("file" in table.columns and "severity_class" in table.columns, LABELS_FILE, list(table.columns),
+            "columns file, severity_class (and optionally severity, n_pitted_teeth, teeth_class)")
+    allowed = {"file", "severity_class", "severity", "n_pitted_teeth", "teeth_class"}
+    extra = sorted(set(table.columns) - allowed)
+    require(not extra, f"{LABELS_FILE}.{extra[0] if extra else ''}", extra, "one of: " + ", ".join(sorted(allowed)))
+    return table.set_index("file")
+
+
+def measurement_files(folder: str | Path) -> list[Path]:
+    """Measurement files in ``folder``: data files with a sidecar beside them."""
+    from compare.measurement import find_sidecar
+
+    root = Path(folder)
+    out = []
+    for p in sorted(root.iterdir()):
+        if p.suffix.lower() not in MEASUREMENT_SUFFIXES or p.name == LABELS_FILE:
+            continue
+        try:
+            find_sidecar(p)
+        except InputError:
+            continue
+        out.append(p)
+    return out
+
+
+def load_measurements(paths: list[str | Path]) -> SignalSet:
+    """Records of measurement files (with sidecars) as one signal set (see module docstring)."""
+    from compare.measurement import load_measurement
+
+    files = [Path(p) for p in paths]
+    require(len(files) >= 1, "FILES", 0, "at least one measurement file")
+    ms = [load_measurement(f) for f in files]
+    fs = ms[0].fs_hz
+    for m, f in zip(ms, files):
+        require(np.isclose(m.fs_hz, fs, rtol=1e-9), f"{f.name}: fs_hz", m.fs_hz, f"{fs:g} Hz (all files alike)")
+    pair_of = [_pair_info(m.pair) for m in ms]
+    for p, f in zip(pair_of, files):
+        require((p.z_pinion, p.z_wheel) == (pair_of[0].z_pinion, pair_of[0].z_wheel), f"{f.name}: pair", p.name,
+                f"{pair_of[0].name} (all files alike)")
+    n = min(m.n_samples for m in ms)
+    x = np.stack([np.asarray(m.signal[:n], dtype=np.float32) for m in ms])
+    rows = [{"file": f.name, "speed_rpm": float(m.speed_rpm), "torque_nm": float(m.torque_nm)} for m, f in zip(ms, files)]
+    labels = pd.DataFrame(rows)
+    tables = {f.parent: _labels_table(f.parent) for f in files}
+    if all(t is not None for t in tables.values()):
+        for col in ("severity_class", "severity", "n_pitted_teeth", "teeth_class"):
+            vals = []
+            for f in files:
+                t = tables[f.parent]
+                require(f.name in t.index, LABELS_FILE, f.name, f"a row for every file ({t.index.size} rows)")
+                vals.append(t.loc[f.name, col] if col in t.columns else np.nan)
+            if not all(pd.isna(v) for v in vals):
+                labels[col] = vals
+        if "teeth_class" not in labels and "n_pitted_teeth" in labels:
+            labels["teeth_class"] = teeth_class_of(labels["n_pitted_teeth"])
+    elif all(m.fault is not None for m in ms):
+        faults = [str(m.fault) for m in ms]
+        labels["severity_class"] = faults
+        healthy = np.array([f == "healthy" for f in faults])
+        labels["severity"] = np.where(healthy, 0.0, np.nan)
+        if healthy.all():
+            labels["n_pitted_teeth"] = 0
+            labels["teeth_class"] = "0"
+    return SignalSet(x, float(fs), pair_of[0], labels, source=", ".join(f.name for f in files[:3])
+                     + (f" (+{len(files) - 3})" if len(files) > 3 else ""))
+
+
+def _pair_info(pair) -> PairInfo:
+    name = getattr(pair, "name", None) or str(pair)
+    try:
+        return PairInfo(str(name), int(pair.pinion.teeth), int(pair.wheel.teeth))
+    except AttributeError:
+        raise InputError("pair", pair, "a gear pair (preset name or pair table) in the sidecar") from None
+
+
+def load_data(paths: list[str | Path], *, channel: str | None = None, pair: str | None = None) -> SignalSet:
+    """A generated dataset directory (one path with ``metadata.json``), a folder of
+    measurement files, or measurement files."""
+    ps = [Path(p) for p in paths]
+    require(len(ps) >= 1, "DATA", 0, "a dataset directory, a folder of measurements or measurement files")
+    if len(ps) == 1 and ps[0].is_dir():
+        if (ps[0] / "metadata.json").is_file():
+            return load_dataset(ps[0], channel=channel, pair=pair)
+        files = measurement_files(ps[0])
+        require(len(files) >= 1, "DATA", str(ps[0]), "a dataset directory or a folder of measurement files with sidecars")
+        return load_measurements(files)
+    for p in ps:
+        require(p.is_file(), "DATA", str(p), "an existing file")
+    return load_measurements(ps)

@@ -1,0 +1,199 @@
+"""What a trained model knows about its inputs, and its predictions.
+
+:class:`ModelSpec` is saved beside the weights as JSON (see :mod:`models.io`):
+the input spec (sampling rate, record length, gear pair, representation or
+feature configuration), the class names, the severity scale, the ranges of the
+operating conditions seen in training and the training configuration.
+
+:func:`check_input` compares a :class:`~models.data.SignalSet` with a spec before
+any prediction: a different sampling rate, gear pair or a record too short for
+one segment is an error (:class:`~gearpit.errors.InputError`); with
+``allow_mismatch`` a different sampling rate or pair becomes a warning where the
+representation can still be computed; speeds or loads outside the trained
+ranges are always warnings, per record.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from gearpit.errors import InputError, require
+from models.data import PairInfo, SignalSet
+from models.representations import FS_BOUND, RepresentationSpec, check_inputs
+
+FORMAT = "gearpit-model"
+FORMAT_VERSION = 1
+MODEL_TYPES: tuple[str, ...] = ("cnn", "logreg", "rf", "gb")
+TASKS: tuple[str, ...] = ("multi", "binary")
+#: label columns whose trained range is recorded and checked at prediction time
+RANGE_COLUMNS: tuple[str, ...] = ("speed_rpm", "torque_nm", "snr_db")
+
+
+@dataclass(frozen=True)
+class ModelSpec:
+    """Input spec, class names and training configuration of a trained model.
+
+    Attributes
+    ----------
+    model_type : {"cnn", "logreg", "rf", "gb"}
+    task : {"multi", "binary"}
+        Severity classes of the dataset, or healthy versus damaged.
+    fs_hz : float
+        Sampling rate of the training records (Hz).
+    n_samples : int
+        Length of the training records (samples).
+    pair : PairInfo
+    representation : dict
+        :class:`~models.representations.RepresentationSpec` fields (CNN) or
+        :class:`features.table.FeatureConfig` fields (feature baselines).
+    severity_classes, teeth_classes : list of str
+    severity_scale : float
+        The severity head predicts ``severity / severity_scale``.
+    channel : str or None
+        The dataset channel the model was trained on (None: not recorded).
+    ranges : dict
+        ``column -> [min, max]`` over the training records (:data:`RANGE_COLUMNS`).
+    train_config : dict
+        The training configuration, as given.
+    training : dict
+        What happened in training (epochs, validation scores, time, sizes).
+    """
+
+    model_type: str
+    task: str
+    fs_hz: float
+    n_samples: int
+    pair: PairInfo
+    representation: dict
+    severity_classes: list[str]
+    teeth_classes: list[str]
+    severity_scale: float
+    channel: str | None = None
+    ranges: dict = field(default_factory=dict)
+    train_config: dict = field(default_factory=dict)
+    training: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        require(self.model_type in MODEL_TYPES, "model_type", self.model_type, "one of: " + ", ".join(MODEL_TYPES))
+        require(self.task in TASKS, "task", self.task, "one of: " + ", ".join(TASKS))
+
+    def representation_spec(self) -> RepresentationSpec:
+        require(self.model_type == "cnn", "model_type", self.model_type, "cnn (only the CNN has a representation)")
+        return RepresentationSpec.from_dict(self.representation)
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["pair"] = self.pair.to_dict()
+        return {"format": FORMAT, "format_version": FORMAT_VERSION, **d}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "ModelSpec":
+        require(isinstance(d, dict) and d.get("format") == FORMAT, "model.json", d.get("format") if isinstance(d, dict)
+                else type(d).__name__, f"a {FORMAT} file")
+        require(d.get("format_version") == FORMAT_VERSION, "format_version", d.get("format_version"), str(FORMAT_VERSION))
+        body = {k: v for k, v in d.items() if k not in ("format", "format_version")}
+        known = set(cls.__dataclass_fields__)
+        for key in body:
+            if key not in known:
+                raise InputError(f"model.json.{key}", body[key], "one of: " + ", ".join(sorted(known)))
+        body["pair"] = PairInfo(**body["pair"])
+        return cls(**body)
+
+
+def training_ranges(labels: pd.DataFrame) -> dict:
+    """``column -> [min, max]`` of the :data:`RANGE_COLUMNS` present in ``labels``."""
+    out = {}
+    for col in RANGE_COLUMNS:
+        if col in labels:
+            v = labels[col].to_numpy(dtype=float)
+            v = v[np.isfinite(v)]
+            if v.size:
+                out[col] = [float(v.min()), float(v.max())]
+    return out
+
+
+def check_input(spec: ModelSpec, data: SignalSet, *, allow_mismatch: bool = False) -> list[str]:
+    """Check ``data`` against ``spec``; return one warning string per record ("" if none).
+
+    Raises
+    ------
+    InputError
+        Different tooth counts or sampling rate (unless ``allow_mismatch`` and the
+        representation can be computed anyway), records too short for one
+        segment, a speed missing where the representation needs it.
+    """
+    common: list[str] = []
+    p, q = spec.pair, data.pair
+    if (p.z_pinion, p.z_wheel) != (q.z_pinion, q.z_wheel):
+        msg = f"gear pair {q.name} ({q.z_pinion}/{q.z_wheel} teeth) differs from the trained {p.name} ({p.z_pinion}/{p.z_wheel})"
+        if not allow_mismatch:
+            raise InputError("pair", f"{q.name} {q.z_pinion}/{q.z_wheel}",
+                             f"the trained pair {p.name} {p.z_pinion}/{p.z_wheel} teeth (or allow_mismatch)")
+        common.append(msg)
+    elif p.name != q.name:
+        common.append(f"gear pair named {q.name}, trained on {p.name} (same tooth counts)")
+    kind = spec.representation.get("kind") if spec.model_type == "cnn" else "features"
+    uses_mesh_only = kind == "mesh_order" and "mesh_cps" in data.labels
+    if not np.isclose(data.fs_hz, spec.fs_hz, rtol=1e-9) and not uses_mesh_only:
+        msg = f"fs {data.fs_hz:g} Hz differs from the trained {spec.fs_hz:g} Hz"
+        if kind in FS_BOUND or not allow_mismatch:
+            raise InputError("fs_hz", data.fs_hz, f"{spec.fs_hz:g} Hz (the model's training sampling rate)"
+                             + ("" if kind in FS_BOUND else ", or allow_mismatch"))
+        common.append(msg)
+    if spec.model_type == "cnn":
+        check_inputs(spec.representation_spec(), data.n_samples, data.fs_hz, data.shaft_hz(), data.mesh_cps(),
+                     z_pinion=data.pair.z_pinion or None)
+    else:
+        need = int(np.ceil(spec.n_samples * 0.5))
+        require(data.n_samples >= need, "n_samples", data.n_samples,
+                f">= {need} samples (half the training record length {spec.n_samples})")
+        require(data.shaft_hz() is not None, "speed_rpm", None, "the pinion speed of every record (features need it)")
+    per_record = [list(common) for _ in range(len(data))]
+    for col, (lo, hi) in spec.ranges.items():
+        if col not in data.labels:
+            continue
+        v = data.labels[col].to_numpy(dtype=float)
+        for i in np.nonzero((v < lo) | (v > hi))[0]:
+            per_record[i].append(f"{col} {v[i]:g} outside the trained range [{lo:g}, {hi:g}]")
+    return ["; ".join(w) for w in per_record]
+
+
+@dataclass(frozen=True)
+class Predictions:
+    """Class probabilities, severity and warnings of a batch of records."""
+
+    severity_classes: list[str]
+    teeth_classes: list[str]
+    severity_proba: np.ndarray
+    teeth_proba: np.ndarray
+    severity: np.ndarray
+    warnings: list[str]
+
+    @property
+    def severity_class(self) -> np.ndarray:
+        return np.asarray(self.severity_classes, dtype=object)[np.argmax(self.severity_proba, axis=1)]
+
+    @property
+    def teeth_class(self) -> np.ndarray:
+        return np.asarray(self.teeth_classes, dtype=object)[np.argmax(self.teeth_proba, axis=1)]
+
+    @property
+    def confidence(self) -> np.ndarray:
+        """Probability of the predicted severity class."""
+        return self.severity_proba.max(axis=1)
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per record: predicted classes, confidences, severity, class probabilities, warning."""
+        df = pd.DataFrame({
+            "severity_class": self.severity_class,
+            "confidence": self.confidence,
+            "severity": self.severity,
+            "teeth_class": self.teeth_class,
+            "teeth_confidence": self.teeth_proba.max(axis=1),
+        })
+        for j, c in enumerate(self.severity_classes):
+            df[f"p_{c}"] = self.severity_proba[:, j]
+        df["warning"] = self.warnings
+        return df

@@ -1,0 +1,200 @@
+"""Dataset generation: identical bytes for any execution, resume after a kill, labels vs masks, readers."""
+from __future__ import annotations
+
+import hashlib
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from datagen import dataset
+from datagen.generate import generate
+from datagen.sweep import sweep_from_dict
+from gearpit.errors import InputError
+
+from test_dataset_config import BASE, REPO, base  # tests/ is on sys.path (conftest.py)
+
+
+def digest(path: Path) -> dict[str, str]:
+    """sha256 of every file under ``path`` (relative names)."""
+    return {str(p.relative_to(path)): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted(path.rglob("*")) if p.is_file()}
+
+
+@pytest.fixture(scope="module")
+def sweep():
+    return sweep_from_dict(BASE)
+
+
+@pytest.fixture(scope="module")
+def reference(sweep, tmp_path_factory):
+    """The sweep generated in this process (workers=1): 18 samples in 5 shards."""
+    out = tmp_path_factory.mktemp("ref") / "ds"
+    report = generate(sweep, out, progress=False)
+    assert report.computed == sweep.n_shards == 5
+    return out
+
+
+def test_two_workers_give_identical_bytes(sweep, reference, tmp_path):
+    """A 2-process pool writes byte-identical files (every file, metadata included) to the in-process run.
+
+    Source: issue 4 ("identical bytes for 1 and 2 workers"); exact (sha256).
+    """
+    generate(sweep, tmp_path / "ds", workers=2, progress=False)
+    assert digest(tmp_path / "ds") == digest(reference)
+
+
+def test_killed_run_resumes_to_identical_bytes(reference, tmp_path):
+    """`gearpit generate` killed (SIGKILL) after its first shard, then run again, equals the uninterrupted run.
+
+    Also simulates a crash between the signal and the index writes of a shard (signals present,
+    no index part, a stale temporary). Source: issue 4 ("killed midway and resumed"); exact (sha256).
+    """
+    toml = tmp_path / "sweep.toml"
+    toml.write_text(_to_toml(BASE))
+    out = tmp_path / "ds"
+    proc = subprocess.Popen([sys.executable, "-m", "gearpit.cli", "generate", str(toml), "--out", str(out),
+                             "--quiet"], cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    deadline = time.monotonic() + 120
+    while not (out.exists() and dataset.finished_shards(out)):
+        assert proc.poll() is None, proc.stderr.read()
+        assert time.monotonic() < deadline
+        time.sleep(0.005)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    done = dataset.finished_shards(out)
+    assert 1 <= len(done) < 5 and not (out / dataset.INDEX).exists()
+    k = max(done)  # crash between the writes of shard k: its commit mark is lost, a temporary is left
+    (out / dataset.SHARDS / dataset.shard_name("index", k)).unlink()
+    (out / dataset.SHARDS / ".signals-000004.npy.abc.part.npy").write_bytes(b"half")
+    report = generate(sweep_from_dict(BASE), out, progress=False)
+    assert report.skipped == len(done) - 1 and report.computed == 5 - report.skipped
+    assert digest(out) == digest(reference)
+
+
+def _to_toml(doc: dict) -> str:
+    def value(v):
+        if isinstance(v, str):
+            return f'"{v}"'
+        if isinstance(v, list):
+            return "[" + ", ".join(value(x) for x in v) + "]"
+        return repr(v)
+
+    lines = []
+
+    def table(name, t):
+        plain = {k: v for k, v in t.items() if not isinstance(v, dict)}
+        if plain or not t:
+            lines.append(f"[{name}]")
+            lines.extend(f"{k} = {value(v)}" for k, v in plain.items())
+        for k, v in t.items():
+            if isinstance(v, dict):
+                table(f"{name}.{k}", v)
+
+    for name, t in doc.items():
+        table(name, t)
+    return "\n".join(lines) + "\n"
+
+
+def test_dask_cluster_gives_identical_bytes(sweep, reference, tmp_path):
+    """On a Dask LocalCluster (2 worker processes) reached by its address (`--dask ADDRESS`), and on one
+    started by generate itself (`--dask-local`, first 2 shards), the files equal the local run's.
+
+    Source: issue 4 ("a Dask LocalCluster run equals the local run"); exact (sha256).
+    """
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        generate(sweep, tmp_path / "ds", dask_address=cluster.scheduler_address, progress=False)
+    assert digest(tmp_path / "ds") == digest(reference)
+    report = generate(sweep, tmp_path / "part", dask_local_workers=1, progress=False, max_shards=2)
+    assert report.computed == 2
+    part, ref = digest(tmp_path / "part"), digest(reference)
+    assert len(part) == 1 + 2 * 3 and all(ref[name] == h for name, h in part.items())
+
+
+def test_labels_agree_with_stored_and_regenerated_masks(sweep, reference):
+    """Severity recomputed from the stored masks (and from masks regenerated from (config, seed, index))
+    equals the index labels; the severity class is the bin that holds it; teeth counts match the masks.
+
+    Source: issue 4 ("labels agree with the masks"); severity exact (same pixel counts), bins [min, max).
+    """
+    index = dataset.load_index(reference)
+    bins = sweep.severity_bins
+    for row in index.itertuples():
+        masks = dataset.load_masks(reference, row.sample_index)
+        sev = {t: float(m.mean()) for t, m in masks.items()}
+        assert sorted(sev) == list(row.pitted_teeth) and len(sev) == row.n_pitted_teeth
+        assert max(sev.values(), default=0.0) == row.severity
+        assert np.array_equal(list(sev.values()), row.severity_by_tooth) or not sev
+        assert bins[row.severity_class_index].name == row.severity_class
+        assert bins[row.severity_class_index].contains(row.severity)
+        tc = sweep.teeth_classes[row.teeth_class_index]
+        assert tc.name == row.teeth_class and tc.low <= row.n_pitted_teeth <= tc.high
+    for i in (0, 4, 11):  # masks regenerate bit for bit from the stored config
+        pm = dataset.regenerate_pit_map(reference, i)
+        stored = dataset.load_masks(reference, i)
+        assert pm.pitted_teeth == sorted(stored)
+        assert all(np.array_equal(pm.mask(t), m) for t, m in stored.items())
+
+
+def test_class_balance_as_configured(sweep, reference):
+    """Every class of the grid holds exactly samples_per_class samples (dataset info counts them).
+
+    Source: issue 4 ("class balance as configured"); exact counts.
+    """
+    info = dataset.dataset_info(reference)
+    assert info["complete"] and info["n_finished"] == 18
+    assert set(info["class_counts"].values()) == {sweep.samples_per_class}
+    assert len(info["class_counts"]) == 9
+    index = dataset.load_index(reference)
+    assert (index["sample_index"].to_numpy() == np.arange(18)).all()
+    assert index.groupby(["severity_class", "teeth_class", "shape"]).size().eq(2).all()
+
+
+def test_readers_agree(sweep, reference):
+    """load_signals, the memory-mapped shards and the torch Dataset return the same float32 samples.
+
+    Source: datagen.dataset layout; exact equality.
+    """
+    torch = pytest.importorskip("torch")
+    from datagen.torch_dataset import SignalDataset
+
+    x_all = dataset.load_signals(reference)
+    assert x_all.shape == (18, sweep.n_time) and x_all.dtype == np.float32
+    assert np.all(np.isfinite(x_all)) and np.all(x_all.std(axis=1) > 0)
+    tacho = dataset.load_signals(reference, [3, 17], channel="tacho_pinion")
+    ds = SignalDataset(reference, labels=("severity_class_index", "severity", "speed_rpm"))
+    x, y = ds[17]
+    assert x.dtype == torch.float32 and x.shape == (2, sweep.n_time)
+    assert np.array_equal(x[0].numpy(), x_all[17]) and np.array_equal(x[1].numpy(), tacho[1])
+    index = dataset.load_index(reference)
+    assert int(y["severity_class_index"]) == index.loc[17, "severity_class_index"]
+    assert y["severity"].dtype == torch.float32
+    with pytest.raises(InputError):
+        dataset.load_signals(reference, [18])
+
+
+def test_other_sweep_in_same_directory_is_refused(reference, tmp_path):
+    """Generating another sweep into an existing dataset raises before writing anything."""
+    other = sweep_from_dict(base(sweep__seed=99))
+    before = digest(reference)
+    with pytest.raises(InputError, match="another config or seed"):
+        generate(other, reference, progress=False)
+    assert digest(reference) == before
+
+
+def test_info_cli(reference, capsys):
+    """`gearpit dataset info DIR` prints class counts, parameter ranges with units and the size on disk."""
+    from gearpit.cli import main
+
+    assert main(["dataset", "info", str(reference)]) == 0
+    out = capsys.readouterr().out
+    assert "spur-gds/severe/2+/cluster" in out and "size on disk" in out
+    assert "speed_rpm" in out and " rpm" in out
+    assert main(["dataset", "info", str(reference / "shards")]) == 2  # not a dataset: one-line error

@@ -1,0 +1,134 @@
+"""Feature ranking (features.ranking, features.plots) and the ``gearpit rank-features`` command."""
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from features.ranking import rank_features, ranking_markdown
+from features.synthetic import gear_signal_example
+from gearpit.cli import main
+
+
+def _table(seed=0):
+    rng = np.random.default_rng(seed)
+    rows = []
+    for sev_cls, sev in enumerate((0.0, 0.2, 0.4, 0.6)):
+        for teeth in ((0,) if sev == 0 else (1, 2)):
+            for rpm in (1200, 1800):
+                for snr in (10, 20):
+                    for _ in range(3):
+                        rows.append(dict(severity=sev, severity_class=sev_cls, n_pitted_teeth=teeth, speed_rpm=rpm,
+                                         snr_db=snr))
+    t = pd.DataFrame(rows)
+    n = len(t)
+    t["good"] = t["severity"] + 0.02 * rng.standard_normal(n)
+    t["speedy"] = t["severity"] + 0.5 * (t["speed_rpm"] == 1800) + 0.02 * rng.standard_normal(n)
+    t["teethy"] = t["n_pitted_teeth"] + 0.05 * rng.standard_normal(n)
+    t["random"] = rng.standard_normal(n)
+    return t
+
+
+def test_rank_orders_informative_above_nuisance_and_noise():
+    """A feature equal to severity + small noise ranks first, pure noise last; the speed-shifted copy has lower
+    speed robustness (S/(S+N) with N = speed spread 0.25 vs S = 0.22 -> ~0.47) than the clean one (> 0.9);
+    monotonicity of the clean feature > 0.95; the tooth-count feature has the largest F for teeth."""
+    r = rank_features(_table(), ["good", "speedy", "teethy", "random"]).set_index("feature")
+    assert r.loc["good", "rank"] == 1 and r.loc["random", "rank"] == 4
+    assert r.loc["good", "robustness_speed_rpm"] > 0.9
+    assert r.loc["speedy", "robustness_speed_rpm"] == pytest.approx(0.224 / (0.224 + 0.25), abs=0.03)
+    assert r.loc["good", "monotonicity"] > 0.95
+    assert r["f_teeth"].idxmax() == "teethy"
+    assert r.loc["random", "monotonicity"] < 0.3
+
+
+def test_robustness_hand_value():
+    """Two classes with means 0 and 1 (S = 0.5) and a speed offset of +/-0.25 inside each class (N = 0.25):
+    robustness = 0.5 / 0.75 = 2/3; tol 1e-12."""
+    t = pd.DataFrame({"severity": [0, 0, 1, 1], "severity_class": [0, 0, 1, 1], "speed_rpm": [1, 2, 1, 2],
+                      "f": [-0.25, 0.25, 0.75, 1.25]})
+    r = rank_features(t, ["f"], teeth_col=None)
+    assert r.loc[0, "robustness_speed_rpm"] == pytest.approx(2 / 3, abs=1e-12)
+
+
+def test_markdown_table_shape():
+    """Markdown output: header, separator and one line per ranked feature."""
+    r = rank_features(_table(), ["good", "random"])
+    md = ranking_markdown(r).strip().splitlines()
+    assert md[0].startswith("| feature | rank | score") and len(md) == 2 + 2
+
+
+def _write_dataset(path, n_per=2, duration_s=0.5):
+    rows, sigs, i = [], [], 0
+    for cls, sev in enumerate((0.0, 0.3, 0.6)):
+        for rpm in (1200, 1500):
+            for _ in range(n_per):
+                s = gear_signal_example(fr_pinion_hz=rpm / 60, fault_depth=sev, duration_s=duration_s, snr_db=15,
+                                        seed=i)
+                sigs.append(s.x.astype(np.float32))
+                rows.append(dict(severity=sev, severity_class=cls, n_pitted_teeth=int(sev > 0), speed_rpm=rpm,
+                                 torque_nm=10.0, snr_db=15.0))
+                i += 1
+    path.mkdir(parents=True, exist_ok=True)
+    pd.DataFrame(rows).to_parquet(path / "index.parquet")
+    np.save(path / "signals.npy", np.stack(sigs))
+    (path / "meta.json").write_text(json.dumps({"fs_hz": 12800.0, "z_pinion": 28, "z_wheel": 37}))
+
+
+def test_rank_features_command(tmp_path, capsys):
+    """`gearpit rank-features DATASET --hht none` on 12 synthetic records writes features.parquet and the
+    ranking CSV/MD/PNG; the pinion FM4 beats the wheel FM4 (the synthetic fault is on the pinion)."""
+    ds = tmp_path / "ds"
+    _write_dataset(ds)
+    assert main(["rank-features", str(ds), "--hht", "none", "--top", "10"]) == 0
+    out = ds / "feature_ranking"
+    for name in ("features.parquet", "feature_ranking.csv", "feature_ranking.md", "feature_ranking.png"):
+        assert (out / name).stat().st_size > 0
+    r = pd.read_csv(out / "feature_ranking.csv").set_index("feature")
+    assert r.loc["tsa_pinion_fm4[1]", "rank"] < r.loc["tsa_wheel_fm4[1]", "rank"]
+    table = pd.read_parquet(out / "features.parquet")
+    assert len(table) == 12 and "severity" in table.columns
+
+
+def test_rank_features_command_bad_input_exits_2(tmp_path, capsys):
+    """A directory without the dataset files, or an unknown config key, exits with code 2 and a one-line error."""
+    assert main(["rank-features", str(tmp_path)]) == 2
+    assert "index.parquet" in capsys.readouterr().err
+    ds = tmp_path / "ds"
+    _write_dataset(ds, n_per=1, duration_s=0.25)
+    cfg = tmp_path / "f.toml"
+    cfg.write_text("[features]\nhht_mthod = 'emd'\n")
+    assert main(["rank-features", str(ds), "--config", str(cfg)]) == 2
+    assert "hht_mthod" in capsys.readouterr().err
+
+
+def test_rank_features_reads_generated_dataset_with_two_pairs(tmp_path):
+    """A `gearpit generate`-layout dataset (written with datagen.dataset.write_shard/finalize, two pairs 28/37 and
+    20/31 teeth, records interleaved): features are computed per pair with its own tooth counts, rows keep the
+    index order, and the pinion FM4 separates the faulty records (> 6) from the healthy ones (< 4) in both pairs."""
+    from datagen import dataset as ds
+
+    root = tmp_path / "gen"
+    pairs = {"a": (28, 37), "b": (20, 31)}
+    rows, sigs = [], []
+    for i in range(8):
+        pair = "a" if i % 2 == 0 else "b"
+        depth = 0.5 if i % 4 >= 2 else 0.0
+        s = gear_signal_example(z_pinion=pairs[pair][0], z_wheel=pairs[pair][1], fault_depth=depth, duration_s=0.5,
+                                snr_db=20, seed=i)
+        sigs.append(s.x[None, :])
+        rows.append(dict(sample_index=i, pair=pair, severity=depth, severity_class="s1" if depth else "healthy",
+                         n_pitted_teeth=int(depth > 0), speed_rpm=1500.0, snr_db=20.0))
+    (root / "shards").mkdir(parents=True)
+    meta = {"format": "gearpit-dataset", "n_samples": 8, "shard_size": 8, "n_shards": 1, "channels": ["accel"],
+            "fs_hz": 12800.0, "n_time": sigs[0].shape[1],
+            "pairs": {k: {"z_pinion": z1, "z_wheel": z2} for k, (z1, z2) in pairs.items()}}
+    (root / "metadata.json").write_text(json.dumps(meta))
+    ds.write_shard(root, 0, np.stack(sigs), rows, [])
+    ds.finalize(root)
+    assert main(["rank-features", str(root), "--hht", "none", "--out", str(tmp_path / "out")]) == 0
+    table = pd.read_parquet(tmp_path / "out" / "features.parquet")
+    assert list(table["sample_index"]) == list(range(8))
+    fm4 = table["tsa_pinion_fm4[1]"].to_numpy()
+    faulty = table["severity"].to_numpy() > 0
+    assert np.all(fm4[faulty] > 6) and np.all(fm4[~faulty] < 4)

@@ -1,0 +1,159 @@
+"""``gearpit train / evaluate / predict`` end to end on a small toy dataset and toy measurement files,
+plus the loaders of models.sources and models.unknown_rate."""
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from gearpit.cli import main
+from models.toy import toy_signal_set
+
+FS = 4096.0
+CONFIG = """
+[train]
+max_epochs = 3
+patience = 3
+batch_size = 8
+widths = [8, 8, 16, 16, 16]
+hidden = 16
+[train.representation]
+kind = "order"
+n_revs = 4
+max_order = 30.0
+"""
+
+
+def _toy(seed: int, n: int = 10):
+    return toy_signal_set(n_per_class=n, fs_hz=FS, z_pinion=29, z_wheel=100, speeds_rpm=(1200.0, 1500.0),
+                          classes=(("healthy", 0.0), ("severe", 0.35)), snr_db=20.0, seed=seed)
+
+
+def _write_dataset(root, data):
+    """A dataset directory in the layout of datagen.dataset (metadata.json, shards, index)."""
+    from datagen.dataset import finalize, write_shard
+
+    root.mkdir()
+    n = len(data)
+    meta = {"format": "gearpit-dataset", "format_version": 1, "name": "toy", "channels": ["acc"], "fs_hz": FS,
+            "n_time": data.n_samples, "n_samples": n, "shard_size": n, "n_shards": 1,
+            "pairs": {"spur-gds": {"z_pinion": 29, "z_wheel": 100}}}
+    (root / "metadata.json").write_text(json.dumps(meta))
+    (root / "shards").mkdir()
+    rows = data.labels.assign(sample_index=np.arange(n), pair="spur-gds").to_dict(orient="records")
+    write_shard(root, 0, data.signals[:, None, :], rows, [])
+    finalize(root)
+
+
+def _write_measurements(folder, data, *, fs=FS, speeds=None):
+    folder.mkdir()
+    names = []
+    for i in range(len(data)):
+        name = f"rec{i}.csv"
+        np.savetxt(folder / name, data.signals[i], header="acc", comments="")
+        speed = float(data.labels["speed_rpm"][i]) if speeds is None else speeds[i]
+        (folder / f"rec{i}.json").write_text(json.dumps({"fs_hz": fs, "speed_rpm": speed, "torque_nm": 50.0,
+                                                         "pair": "spur-gds", "sensor": "acc"}))
+        names.append(name)
+    pd.DataFrame({"file": names, "severity_class": data.labels["severity_class"],
+                  "severity": data.labels["severity"], "n_pitted_teeth": data.labels["n_pitted_teeth"]}).to_csv(
+        folder / "labels.csv", index=False)
+
+
+@pytest.fixture(scope="module")
+def workdir(tmp_path_factory):
+    root = tmp_path_factory.mktemp("cli")
+    _write_dataset(root / "ds", _toy(1))
+    (root / "train.toml").write_text(CONFIG)
+    assert main(["train", str(root / "ds"), "--out", str(root / "model"), "--config", str(root / "train.toml"),
+                 "--quiet"]) == 0
+    return root
+
+
+def test_train_writes_a_model_directory(workdir):
+    """train writes model.json (spec with the dataset channel and pair) and weights.pt."""
+    spec = json.loads((workdir / "model" / "model.json").read_text())
+    assert (workdir / "model" / "weights.pt").is_file()
+    assert spec["channel"] == "acc" and spec["pair"]["name"] == "spur-gds"
+    assert spec["train_config"]["max_epochs"] == 3 and spec["training"]["epochs_run"] <= 3
+
+
+def test_evaluate_on_a_dataset_writes_json_markdown_png(workdir, capsys):
+    """evaluate on a dataset writes metrics.json/.md, predictions.csv and both figures; scores in [0, 1]."""
+    out = workdir / "eval"
+    assert main(["evaluate", str(workdir / "model"), str(workdir / "ds"), "--out", str(out)]) == 0
+    m = json.loads((out / "metrics.json").read_text())
+    assert m["n_records"] == 20 and 0 <= m["severity_class"]["accuracy"] <= 1
+    assert sum(map(sum, m["severity_class"]["confusion"])) == 20
+    for f in ("metrics.md", "predictions.csv", "confusion.png", "breakdown.png"):
+        assert (out / f).stat().st_size > 0
+    assert "speed_rpm" in m["breakdown"]
+
+
+def test_evaluate_and_predict_on_measurement_files(workdir, capsys):
+    """A folder of labelled measurement files (CSV + JSON sidecar + labels.csv) is evaluated; predict on
+    files prints one row per file and warns on stderr about a speed outside the trained range."""
+    folder = workdir / "meas"
+    test = _toy(7, n=2)
+    _write_measurements(folder, test, speeds=[1200.0, 1300.0, 1500.0, 2000.0])
+    assert main(["evaluate", str(workdir / "model"), str(folder), "--out", str(workdir / "eval_meas")]) == 0
+    m = json.loads((workdir / "eval_meas" / "metrics.json").read_text())
+    assert m["n_records"] == 4 and m["n_warnings"] == 1
+    capsys.readouterr()
+    files = [str(folder / f"rec{i}.csv") for i in range(4)]
+    assert main(["predict", str(workdir / "model"), *files, "--json"]) == 0
+    captured = capsys.readouterr()
+    rows = [json.loads(line) for line in captured.out.strip().splitlines()]
+    assert [r["record"] for r in rows] == [f"rec{i}.csv" for i in range(4)]
+    assert all(0.5 <= r["confidence"] <= 1.0 for r in rows)
+    assert "speed_rpm 2000 outside the trained range" in captured.err
+
+
+def test_predict_refuses_a_wrong_sampling_rate(workdir, capsys):
+    """A measurement at another fs: exit code 2 and one line naming fs_hz and the trained value."""
+    folder = workdir / "meas_fs"
+    _write_measurements(folder, _toy(8, n=1), fs=2 * FS)
+    capsys.readouterr()
+    assert main(["predict", str(workdir / "model"), str(folder / "rec0.csv")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "fs_hz" in err and "4096" in err
+
+
+def test_baseline_through_the_cli(workdir):
+    """train --model logreg writes arrays.npz (no pickle) and evaluate scores it."""
+    assert main(["train", str(workdir / "ds"), "--out", str(workdir / "logreg"), "--model", "logreg"]) == 0
+    assert (workdir / "logreg" / "arrays.npz").is_file()
+    assert main(["evaluate", str(workdir / "logreg"), str(workdir / "ds"), "--out", str(workdir / "eval_lr")]) == 0
+    m = json.loads((workdir / "eval_lr" / "metrics.json").read_text())
+    assert m["severity_class"]["accuracy"] >= 0.9  # training records, separable toy problem
+
+
+def test_estimate_mesh_frequency_without_sampling_rate():
+    """A harmonic family at 0.0741 cycles/sample (4 harmonics, 1/k amplitudes) in noise of equal power is
+    found to within one padded bin (1 / (4 n) = 1.5e-5 cycles/sample for n = 16384)."""
+    from models.unknown_rate import estimate_mesh_cps
+
+    n = 16384
+    k = np.arange(n)
+    x = sum(np.cos(2 * np.pi * h * 0.0741 * k + h) / h for h in range(1, 5))
+    x = x + np.random.default_rng(0).standard_normal(n) * x.std()
+    assert estimate_mesh_cps(x) == pytest.approx(0.0741, abs=1.6e-5)
+
+
+def test_unknown_rate_csv_records_and_labels(tmp_path):
+    """SpectraQuest-named CSVs are cut into records labelled from the name (h -> healthy with severity 0,
+    b -> broken_tooth with unknown severity), load in percent from the name."""
+    from models.unknown_rate import load_unknown_rate_csv
+
+    k = np.arange(20000)
+    for name in ("h30hz50", "b30hz50"):
+        x = sum(np.cos(2 * np.pi * h * 0.074 * k) / h for h in range(1, 5))
+        x = x + 0.1 * np.random.default_rng(1).standard_normal(k.size)
+        pd.DataFrame({"a1": x, "a2": x}).to_csv(tmp_path / f"{name}.csv", index=False)
+    d = load_unknown_rate_csv(sorted(tmp_path.glob("*.csv")), channel="a2", record_samples=8192)
+    assert len(d) == 4 and d.n_samples == 8192
+    assert list(d.labels["severity_class"]) == ["broken_tooth"] * 2 + ["healthy"] * 2
+    assert np.isnan(d.labels["severity"][0]) and d.labels["severity"][3] == 0.0
+    assert set(d.labels["load_percent"]) == {50.0}
+    assert d.labels["mesh_cps"].to_numpy() == pytest.approx(0.074, abs=2e-5)
+    assert d.as_binary().labels["severity_class"].tolist() == ["damaged"] * 2 + ["healthy"] * 2
