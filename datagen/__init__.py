@@ -8,4 +8,15 @@
 - ``photo``      pit masks extracted from a photo of a flank
 - ``compliance`` potential-energy tooth compliance terms (bending, shear, axial, fillet, Hertz)
 - ``stiffness``  time-varying mesh stiffness over a revolution, slices, pits
+- ``lumped_model``     DOFs, mass / stiffness / damping matrices of the drive train (spur 6 DOF, helical 8)
+- ``mesh_excitation``  stiffness + effect deviations -> the periodic mesh record a simulation reads
+- ``newmark``          batched average-acceleration Newmark with the rank-one mesh term (+ Newton)
+- ``shooting``         periodic steady state of linear constant-speed cases
+- ``time_stepping``    start-up transient + kept record for nonlinear / non-stationary cases
+- ``dynamics``         picks the path and batches cases
+- ``output_channels``, ``decimation``  channels, anti-alias filtering and decimation to fs
+- ``simulate``   THE orchestrator: Case -> Signals (CLI, datasets, comparison and tests call it)
+- ``effects/``   the effect contract and the physical effects (registry)
+- ``sweep``, ``draws``, ``sampling``  dataset sweep configs and per-sample draws from (seed, index)
+- ``dataset``, ``generate``, ``torch_dataset``  dataset storage, parallel / Dask generation, torch reader
 """

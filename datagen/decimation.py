@@ -136,20 +136,21 @@ def resample_periodic(x: np.ndarray, period_s: float, fs_hz: float, n_out: int, 
         M = scipy.fft.next_fast_len(max(N, int(np.ceil(oversample * fs_hz * period_s))), real=True)
         t = np.arange(n_out) / fs_hz
         idx, w = _lagrange_weights(np.mod(t / period_s, 1.0) * M, M)
-    out = np.empty((x.shape[0], x.shape[2], n_out))
-    gain = _gain_at_harmonics(N // 2 + 1, float(period_s), float(fs_hz))[:, None]
+    Q = x.shape[1]
+    out = np.empty((x.shape[0], Q, n_out))
+    gain = _gain_at_harmonics(N // 2 + 1, float(period_s), float(fs_hz))
     for b in range(x.shape[0]):             # per record: arrays stay in cache
-        X = scipy.fft.rfft(x[b], axis=0)
-        n_keep = min(X.shape[0], M // 2 + 1)
-        y = scipy.fft.irfft(X[:n_keep] * gain[:n_keep], n=M, axis=0) * (M / N)
+        X = scipy.fft.rfft(x[b], axis=-1)
+        n_keep = min(X.shape[1], M // 2 + 1)
+        y = scipy.fft.irfft(X[:, :n_keep] * gain[:n_keep], n=M, axis=-1) * (M / N)     # (Q, M)
         if idx is None:
-            one = y[seq].T                          # (Q, M)
-            reps = -(-n_out // M)
-            out[b] = np.tile(one, (1, reps))[:, :n_out] if reps > 1 else one[:, :n_out]
+            one = y[:, seq]                         # output samples 0..M-1, then repeating
+            for start in range(0, n_out, M):
+                stop = min(start + M, n_out)
+                out[b, :, start:stop] = one[:, :stop - start]
         else:
-            yt = np.ascontiguousarray(y.T)          # (Q, M)
-            acc = w[:, 0] * yt[:, idx[:, 0]]
+            acc = w[:, 0] * y[:, idx[:, 0]]
             for d in range(1, idx.shape[1]):
-                acc += w[:, d] * yt[:, idx[:, d]]
+                acc += w[:, d] * y[:, idx[:, d]]
             out[b] = acc
     return out

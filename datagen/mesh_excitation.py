@@ -70,24 +70,21 @@ def mesh_record(stiffness, effects, ctx) -> MeshRecord:
             stiffness = e.mesh_stiffness(stiffness, ctx)
     pair = stiffness.pair
     z1, z2 = pair.pinion.teeth, pair.wheel.teeth
-    P0, ppc = stiffness.period_cycles, stiffness.positions_per_cycle
+    ppc = stiffness.positions_per_cycle
+    P0 = stiffness.repeat_cycles  # 1 for a healthy pair: a wheel-tooth error then needs z2 cycles, not lcm(z1, z2)
     tooth_fx = [e for e in effects if "tooth_deviation_m" in e.hooks()]
     angle_fx = [e for e in effects if "angle_deviation_m" in e.hooks()]
     P = P0
     for e in tooth_fx + angle_fx:
         P = math.lcm(P, int(e.deviation_period_cycles(ctx)))
-    tiles = P // P0
-    k_slots = np.tile(stiffness.k_slots_n_per_m, (tiles, 1))
-    e_force_slots = np.zeros_like(k_slots)
-    n0 = stiffness.k_n_per_m.size
-    for j in range(tiles if tooth_fx else 0):
-        shift = j * P0
+    k_slots = np.tile(stiffness.k_slots_n_per_m[:P0 * ppc], (P // P0, 1))
+    if tooth_fx:
+        def f(g, pt, wt):
+            return sum(e.tooth_deviation_m(g, pt, wt, ctx) for e in tooth_fx)
 
-        def f(g, pt, wt, shift=shift):
-            pt2, wt2 = (pt + shift) % z1, (wt + shift) % z2
-            return sum(e.tooth_deviation_m(g, pt2, wt2, ctx) for e in tooth_fx)
-
-        e_force_slots[j * n0:(j + 1) * n0] = stiffness.weighted(f)
+        e_force_slots = stiffness.weighted(f, n_cycles=P)
+    else:
+        e_force_slots = np.zeros_like(k_slots)
     if angle_fx:
         x = np.arange(P * ppc) / ppc
         th1, th2 = 2 * np.pi * x / z1, 2 * np.pi * x / z2

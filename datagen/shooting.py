@@ -30,10 +30,10 @@ def periodic_response(cases, P: int, n_c: int) -> list[Response]:
     """Periodic steady state by shooting, the monodromy composed from distinct mesh cycles.
 
     With ``n_c`` steps per mesh cycle, the one-period map is the product of the
-    ``P`` one-cycle maps ``s -> Phi_j s + p_j`` (full Newmark state). Cycles with
-    the same stiffness and error-force samples (all healthy cycles of a case)
-    share their map, so the ``3n + 1``-column runs cover only the distinct
-    cycles; one storing pass from the periodic initial state follows.
+    ``P`` one-cycle maps ``x -> Phi_j x + p_j`` on ``x = (q, q')``. Cycles with
+    the same samples (all healthy cycles of a case) share their map, so the
+    ``2n + 1``-column runs cover only the distinct cycles; one storing pass
+    from the periodic initial state follows.
     """
     N = P * n_c
     C = len(cases)
@@ -45,20 +45,22 @@ def periodic_response(cases, P: int, n_c: int) -> list[Response]:
     c_m = mesh_damping(cases)
     statics = [static_state(c) for c in cases]
     u = np.arange(1, n_c + 1) / n_c
-    k = np.empty((P, n_c, C))
-    E = np.empty((P, n_c, C))
+    kc = np.empty((C, P, n_c))
+    Ec = np.empty((C, P, n_c))
     for j, c in enumerate(cases):
         x = np.arange(P)[:, None] + (u[None, :] + statics[j][1])
-        k[:, :, j], E[:, :, j] = c.record.at(x)
-    has_E = bool(np.any(E != 0))
+        kc[j], Ec[j] = c.record.at(x)
+    has_E = bool(np.any(Ec != 0))
+    k = kc.transpose(1, 2, 0)                                           # (P, n_c, C) views
+    E = Ec.transpose(1, 2, 0)
     # The map of cycle j acts on (q, q'); its start acceleration is consistent with the last sample of
     # cycle j-1, so a cycle is identified by that sample plus its own n_c samples.
     k_prev = np.roll(k[:, -1, :], 1, axis=0)                           # (P, C)
     E_prev = np.roll(E[:, -1, :], 1, axis=0)
     rows, inverse = [], np.empty((C, P), dtype=np.int64)
     for j in range(C):                       # set-up loop over cases (not over time)
-        kk = np.hstack([k_prev[:, j:j + 1], k[:, :, j]])
-        ee = np.hstack([E_prev[:, j:j + 1], E[:, :, j]])
+        kk = np.hstack([k_prev[:, j:j + 1], kc[j]])
+        ee = np.hstack([E_prev[:, j:j + 1], Ec[j]])
         key = np.round(np.hstack([kk / np.abs(kk).max(), ee / max(np.abs(ee).max(), 1e-300)]), 10)
         seen: dict[bytes, int] = {}
         for cy in range(P):
@@ -70,8 +72,8 @@ def periodic_response(cases, P: int, n_c: int) -> list[Response]:
     case_of = np.array([r[0] for r in rows])
     cyc_of = np.array([r[1] for r in rows])
     Q = len(rows)
-    k_q = k[cyc_of, :, case_of].T                                       # (n_c, Q)
-    E_q = E[cyc_of, :, case_of].T if has_E else None
+    k_q = kc[case_of, cyc_of].T                                         # (n_c, Q)
+    E_q = Ec[case_of, cyc_of].T if has_E else None
     ops_q = [ops[j] for j in case_of]
     batch_q = newmark.Batch(ops_q, f[case_of])
     # columns: 0 = particular from rest, 1..2n = unit (q, q'); accelerations consistent at the start
@@ -79,8 +81,8 @@ def periodic_response(cases, P: int, n_c: int) -> list[Response]:
     x_init[:, 1:, :] = np.eye(2 * n)[None]
     scale = np.zeros(2 * n + 1)
     scale[0] = 1.0
-    S0 = newmark.consistent_states(ops_q, x_init, f[case_of], k_prev[cyc_of, case_of], E_prev[cyc_of, case_of], c_m[case_of],
-                     scale)
+    S0 = newmark.consistent_states(ops_q, x_init, f[case_of], k_prev[cyc_of, case_of], E_prev[cyc_of, case_of],
+                                   c_m[case_of], scale)
     S_end, _, _ = newmark.run_linear(batch_q, S0, k_q, c_m[case_of], E_q, scale, store=False)
     Phi_q = np.transpose(S_end[:, 1:, :2 * n], (0, 2, 1))              # column i = image of unit state i
     p_q = S_end[:, 0, :2 * n]
@@ -91,8 +93,9 @@ def periodic_response(cases, P: int, n_c: int) -> list[Response]:
         Phi = np.matmul(Phi_q[sel], Phi)
         p = np.einsum("cij,cj->ci", Phi_q[sel], p) + p_q[sel]
     x0 = np.linalg.solve(np.eye(2 * n)[None] - Phi, p[..., None])[..., 0]
-    s0 = newmark.consistent_states(ops, x0[:, None, :], f, k[-1, -1, :], E[-1, -1, :], c_m, np.ones(1))
-    k_t, E_t = k.reshape(N, C), (E.reshape(N, C) if has_E else None)
+    s0 = newmark.consistent_states(ops, x0[:, None, :], f, kc[:, -1, -1], Ec[:, -1, -1], c_m, np.ones(1))
+    k_t = np.ascontiguousarray(kc.reshape(C, N).T)
+    E_t = np.ascontiguousarray(Ec.reshape(C, N).T) if has_E else None
     S2, traj, force = newmark.run_linear(batch, s0, k_t, c_m, E_t, np.ones(1), store=True, store_shift=1)
     s0 = s0[:, 0]
     periodicity = np.abs(S2[:, 0, :2 * n] - s0[:, :2 * n]).max(axis=1) / np.abs(s0[:, :2 * n]).max(axis=1)

@@ -152,24 +152,37 @@ class MeshStiffness:
                 k[s] = self._overrides[(m, s)][u]
         return k
 
-    def weighted(self, f) -> np.ndarray:
-        """(n_pos, n_slots): sum over slices of k_slice * f(g_m, pinion_tooth, wheel_tooth).
+    def weighted(self, f, *, n_cycles: int | None = None) -> np.ndarray:
+        """(n_cycles * ppc, n_slots): sum over slices of k_slice * f(g_m, pinion_tooth, wheel_tooth).
 
         ``f`` is vectorised over arrays of equal shape. With ``f`` a tooth-pair
         deviation along the line of action (m) this is the pair's error force
-        at zero deflection (N/m * m = N).
+        at zero deflection (N/m * m = N). ``n_cycles`` (default: the record's
+        period) may be any length: engagement ``m = cycle - slot`` keeps its own
+        pinion and wheel teeth (``m % z1``, ``m % z2``) while its stiffness repeats
+        with the record's period, so a per-wheel-tooth deviation over a wheel
+        revolution needs no hunting-period record.
         """
         P, ppc = self.period_cycles, self.positions_per_cycle
+        n_cycles = P if n_cycles is None else int(n_cycles)
         z1, z2 = self.pair.pinion.teeth, self.pair.wheel.teeth
-        out = np.zeros(self.k_slots_n_per_m.shape)
+        out = np.zeros((n_cycles * ppc, self.n_slots))
         g = np.nan_to_num(self._g_cycle, nan=self.pair.contact_start_m)
-        for c in range(P):
+        shape = g.shape[::2]
+        for c in range(n_cycles):
             for s in range(self.n_slots):
-                m = (c - s) % P
-                k = self._overrides.get((m, s), self._k_cycle[:, s, :])
-                vals = f(g[:, s, :], np.full(g.shape[::2], m % z1), np.full(g.shape[::2], m % z2))
+                m = c - s
+                k = self._overrides.get((m % P, s), self._k_cycle[:, s, :])
+                vals = f(g[:, s, :], np.full(shape, m % z1), np.full(shape, m % z2))
                 out[c * ppc:(c + 1) * ppc, s] = np.sum(k * vals, axis=1)
         return out
+
+    @cached_property
+    def repeat_cycles(self) -> int:
+        """Smallest number of mesh cycles after which the stiffness repeats (1 without pits)."""
+        if not self._overrides:
+            return 1
+        return self.period_cycles
 
     def summary(self) -> dict:
         """The numbers ``gearpit stiffness --json`` prints."""
