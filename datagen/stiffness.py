@@ -163,19 +163,23 @@ class MeshStiffness:
         with the record's period, so a per-wheel-tooth deviation over a wheel
         revolution needs no hunting-period record.
         """
-        P, ppc = self.period_cycles, self.positions_per_cycle
+        P, ppc, S = self.period_cycles, self.positions_per_cycle, self.n_slots
         n_cycles = P if n_cycles is None else int(n_cycles)
         z1, z2 = self.pair.pinion.teeth, self.pair.wheel.teeth
-        out = np.zeros((n_cycles * ppc, self.n_slots))
-        g = np.nan_to_num(self._g_cycle, nan=self.pair.contact_start_m)
-        shape = g.shape[::2]
-        for c in range(n_cycles):
-            for s in range(self.n_slots):
-                m = c - s
-                k = self._overrides.get((m % P, s), self._k_cycle[:, s, :])
-                vals = f(g[:, s, :], np.full(shape, m % z1), np.full(shape, m % z2))
-                out[c * ppc:(c + 1) * ppc, s] = np.sum(k * vals, axis=1)
-        return out
+        g = np.nan_to_num(self._g_cycle, nan=self.pair.contact_start_m)          # (ppc, S, n_slices)
+        g_t, k_t = g.transpose(1, 0, 2), self._k_cycle.transpose(1, 0, 2)           # (S, ppc, n_slices)
+        out = np.empty((n_cycles, ppc, S))
+        chunk = max(1, 2_000_000 // g.size)                                         # bound the temporaries
+        for c0 in range(0, n_cycles, chunk):
+            m = np.arange(c0, min(n_cycles, c0 + chunk))[:, None] - np.arange(S)[None, :]  # engagements
+            k = np.broadcast_to(k_t[None], (m.shape[0],) + k_t.shape).copy()
+            for (mm, s), kk in self._overrides.items():
+                k[np.nonzero(m[:, s] % P == mm)[0], s] = kk
+            shape = k.shape
+            vals = f(np.broadcast_to(g_t[None], shape), np.broadcast_to((m % z1)[:, :, None, None], shape),
+                     np.broadcast_to((m % z2)[:, :, None, None], shape))
+            out[c0:c0 + m.shape[0]] = np.sum(k * vals, axis=3).transpose(0, 2, 1)
+        return out.reshape(n_cycles * ppc, S)
 
     @cached_property
     def repeat_cycles(self) -> int:
