@@ -3,7 +3,8 @@
 For every registered effect that is not in the model (and is not part of the
 measurement chain, :data:`compare.fitspace.CHAIN_EFFECTS`), its few
 parameters (:mod:`compare.fitspace`) are fitted to the measurement by
-minimising the total error of :mod:`compare.error` within their bounds:
+minimising the total error of :mod:`compare.error` within their bounds, in batched
+rounds (:mod:`compare.search`; time-stepped effects skip round C and get a richer round B):
 
 1. round A - a coarse grid of the first parameter (or the frequencies the
    measurement points to, for a parameter in Hz), the second at its default
@@ -28,10 +29,15 @@ chi-square; the 1-sigma interval of a parameter is where the profile of the
 quadratic surrogate rises by 1: ``sigma_u^2 = (E_min^2 / N) (H^-1)_jj`` with
 ``H`` the Hessian of ``E^2`` in the search coordinate. A non-positive
 curvature means the parameter is not identifiable from these views
-(``sigma = inf``).
+(``sigma = inf``); when only the joint surrogate is indefinite (two parameters
+trading off along a valley), the conditional value from a parabola along that
+parameter alone is given instead.
 
-An effect is *claimed* when it lowers the total error by at least
-``claim_reduction`` (fraction). A disagreement of the baseline larger than
+The best-ranked effect is *claimed* when it lowers the total error by at
+least ``claim_reduction`` (fraction); one at a time, because once it is in
+the model the next comparison ranks the rest against the improved model.
+Other effects that also pass the threshold are listed as alternatives
+(several effects can leave similar lines). A disagreement of the baseline larger than
 ``unexplained_db`` that no claimed effect halves is reported as unexplained:
 nothing in the registry accounts for it, and no attribution is forced.
 
@@ -47,11 +53,11 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import minimize
 
 from compare.comparison import Reference, evaluate, prepare_reference, simulate_model
 from compare.error import effective_count
-from compare.fitspace import CHAIN_EFFECTS, FitSpace, fit_space, frequency_seeds, grid
+from compare.fitspace import CHAIN_EFFECTS, fit_space
+from compare.search import Search, Trial, quadratic, round_a, round_b, round_c, round_d
 from gearpit.errors import GearpitError, require
 
 
@@ -63,19 +69,8 @@ class AttributionSettings:
     unexplained_db: float = 6.0
     transient_window_s: float = 0.5
     transient_startup_s: float = 0.15
-    transient_omega_dt: float = 1.0
+    transient_omega_dt: float = 0.5
     seed: int = 0
-
-
-@dataclass
-class Trial:
-    values: dict
-    choice: object
-    u: np.ndarray
-    error_db: float = math.inf
-    residual_db: np.ndarray | None = None
-    view_error_db: dict = field(default_factory=dict)
-    note: str = ""
 
 
 @dataclass
@@ -128,129 +123,7 @@ class Attribution:
                 "n_simulations": self.n_simulations, "group_seconds": self.group_seconds}
 
 
-class _Search:
-    def __init__(self, cls, space: FitSpace):
-        self.cls = cls
-        self.space = space
-        self.trials: list[Trial] = []
-        self.choice = cls().params().get(space.choice[0]) if space.choice else None
-        self.default_choice = self.choice
-
-    def point(self, values: dict, choice=None) -> Trial:
-        choice = self.choice if choice is None else choice
-        u = np.array([p.to_u(values[p.name]) for p in self.space.params])
-        return Trial(values=dict(values), choice=choice, u=u)
-
-    def defaults(self) -> dict:
-        return {p.name: p.default for p in self.space.params}
-
-    @property
-    def best(self) -> Trial | None:
-        done = [t for t in self.trials if math.isfinite(t.error_db)]
-        return min(done, key=lambda t: t.error_db) if done else None
-
-    def build(self, t: Trial):
-        kw = dict(t.values)
-        if self.space.choice:
-            kw[self.space.choice[0]] = t.choice
-        return self.cls(**kw)
-
-    def seen(self, t: Trial) -> bool:
-        return any(np.allclose(t.u, s.u, atol=1e-4) and t.choice == s.choice for s in self.trials)
-
-
-def _round_a(s: _Search, ref_residual, ref) -> list[Trial]:
-    ps = s.space.params
-    if not ps:
-        return [s.point({})]
-    p0 = ps[0]
-    first = frequency_seeds(ref, ref_residual, p0) if p0.unit == "Hz" else grid(p0)
-    second = [None]
-    if len(ps) > 1:
-        second = list(grid(ps[1], 3)) if p0.unit == "Hz" else [ps[1].default]
-    out = []
-    for v0 in first:
-        for v1 in second:
-            vals = s.defaults()
-            vals[p0.name] = float(v0)
-            if v1 is not None:
-                vals[ps[1].name] = float(v1)
-            out.append(s.point(vals))
-    return out
-
-
-def _round_b(s: _Search) -> list[Trial]:
-    ps, best = s.space.params, s.best
-    if best is None:
-        return []
-    out = []
-    if len(ps) >= 2:
-        for v in grid(ps[1], 5):
-            out.append(s.point({**best.values, ps[1].name: float(v)}))
-    elif len(ps) == 1:
-        step = 1.0 / (2 * 6)
-        for du in (-2 * step, -step, step, 2 * step):
-            out.append(s.point({ps[0].name: float(ps[0].from_u(best.u[0] + du))}))
-    if s.space.choice:
-        out += [s.point(best.values, c) for c in s.space.choice[1] if c != best.choice]
-    return [t for t in out if not s.seen(t)]
-
-
-def _round_c(s: _Search) -> list[Trial]:
-    ps, best = s.space.params, s.best
-    if best is None or not ps:
-        return []
-    s.choice = best.choice
-    out = []
-    for j, p in enumerate(ps):
-        step = (0.02 if p.unit == "Hz" else 1.0 / 18) if j == 0 else 1.0 / 15
-        for du in (-step, step):
-            u = best.u.copy()
-            u[j] = np.clip(u[j] + du, 0, 1)
-            out.append(s.point({q.name: float(q.from_u(u[i])) for i, q in enumerate(ps)}, best.choice))
-    return [t for t in out if not s.seen(t)]
-
-
-def _quadratic(s: _Search):
-    """Fit E^2 = c + g.u + 1/2 u'Hu on the points near the best; returns (u_min, H, E2_min) or None."""
-    best = s.best
-    pts = [t for t in s.trials if math.isfinite(t.error_db) and t.choice == best.choice]
-    n = len(s.space.params)
-    need = 1 + n + n * (n + 1) // 2
-    if n == 0 or len(pts) < need:
-        return None
-    pts.sort(key=lambda t: float(np.sum((t.u - best.u) ** 2)))
-    pts = pts[:max(need + 2, 2 * need)]
-    U = np.array([t.u - best.u for t in pts])
-    y = np.array([t.error_db ** 2 for t in pts])
-    cols = [np.ones(len(pts))] + [U[:, j] for j in range(n)]
-    pairs = [(i, j) for i in range(n) for j in range(i, n)]
-    cols += [U[:, i] * U[:, j] * (0.5 if i == j else 1.0) for i, j in pairs]
-    A = np.column_stack(cols)
-    coef, *_ = np.linalg.lstsq(A, y, rcond=None)
-    g = coef[1:1 + n]
-    H = np.zeros((n, n))
-    for (i, j), c in zip(pairs, coef[1 + n:]):
-        H[i, j] = H[j, i] = c
-
-    def f(u):
-        return coef[0] + g @ u + 0.5 * u @ H @ u
-
-    bounds = [(-bu, 1 - bu) for bu in best.u]
-    res = minimize(f, np.zeros(n), jac=lambda u: g + H @ u, bounds=bounds, method="L-BFGS-B")
-    return best.u + res.x, H, max(float(res.fun), 1e-12)
-
-
-def _round_d(s: _Search) -> list[Trial]:
-    q = _quadratic(s)
-    if q is None:
-        return []
-    u = q[0]
-    t = s.point({p.name: float(p.from_u(u[j])) for j, p in enumerate(s.space.params)}, s.best.choice)
-    return [] if s.seen(t) else [t]
-
-
-def _run(trials: list[tuple[_Search, Trial]], ref: Reference, model, settings, transient: bool, counter: list,
+def _run(trials: list[tuple[Search, Trial]], ref: Reference, model, settings, transient: bool, counter: list,
          with_baseline: bool = False):
     """Simulate and evaluate ``trials`` in one batch; with ``with_baseline`` the model itself rides along
     and its :class:`Residuals` are returned."""
@@ -274,13 +147,13 @@ def _run(trials: list[tuple[_Search, Trial]], ref: Reference, model, settings, t
     dur = ref.model_duration_s()
     try:
         ys = simulate_model(ref, model, extra_effects_list=extras, seed=settings.seed, duration_s=dur, solver=solver)
-    except (GearpitError, FloatingPointError, np.linalg.LinAlgError):
+    except (GearpitError, FloatingPointError, MemoryError, np.linalg.LinAlgError):
         ys = []
         for extra in extras:
             try:
                 ys += simulate_model(ref, model, extra_effects_list=[extra], seed=settings.seed, duration_s=dur,
                                      solver=solver)
-            except (GearpitError, FloatingPointError, np.linalg.LinAlgError):
+            except (GearpitError, FloatingPointError, MemoryError, np.linalg.LinAlgError):
                 ys.append(None)
     counter[0] += len(extras)
     base = None
@@ -318,17 +191,18 @@ def _search_group(names_: list, ref: Reference, model, settings, transient: bool
     from datagen.effects import get
 
     t0 = time.perf_counter()
-    searches = [_Search(get(n), fit_space(get(n))) for n in names_]
+    searches = [Search(get(n), fit_space(get(n))) for n in names_]
     counter = [0]
     seed_ref = ref
     if transient:
         fr_w = ref.speed.fr_pinion_hz * ref.plan.z_pinion / ref.plan.z_wheel
         dur = min(len(ref.x) / ref.fs_hz, max(settings.transient_window_s, 3.0 / fr_w))
-        ref = prepare_reference(ref.measurement, duration_s=dur, speed=ref.speed)
-    first = [(s, t) for s in searches for t in _round_a(s, seed_residual, seed_ref)]
+        ref = prepare_reference(ref.measurement, duration_s=dur, speed=ref.speed, lines_from=ref.plan)
+    first = [(s, t) for s in searches for t in round_a(s, seed_residual, seed_ref)]
     # the current model is simulated in the first batch, exactly like the candidates (seed, solver, window)
     base = _run(first, ref, model, settings, transient, counter, with_baseline=True)
-    rounds = [_round_b, _round_d] if transient else [_round_b, _round_c, _round_d]  # time stepping is the cost
+    # a time-stepped batch costs about the same for 1 or 40 cases: fewer, richer rounds
+    rounds = [lambda s: round_b(s, rich=True), round_d] if transient else [round_b, round_c, round_d]
     for make in rounds:
         _run([(s, t) for s in searches for t in make(s)], ref, model, settings, transient, counter)
     results = [_result(s, base, ref, n_eff, disagreements) for s in searches]
@@ -387,8 +261,9 @@ def attribute(ref: Reference, model, baseline_residual: np.ndarray, *, candidate
         results += r
         n_sims += n
     results.sort(key=lambda c: -c.reduction)
-    for c in results:
-        c.claimed = c.reduction >= settings.claim_reduction and c.status == "fitted"
+    # one effect at a time: the best, if it is worth it (add it, compare again, and the next one shows)
+    if results and results[0].reduction >= settings.claim_reduction and results[0].status == "fitted":
+        results[0].claimed = True
     explained = {k for c in results if c.claimed for k in c.explains}
     unexplained = [d.to_dict() for d in disagreements
                    if abs(d.residual_db) >= settings.unexplained_db and d.key not in explained]
@@ -396,7 +271,7 @@ def attribute(ref: Reference, model, baseline_residual: np.ndarray, *, candidate
                        n_simulations=n_sims, group_seconds=seconds)
 
 
-def _result(s: _Search, base, ref: Reference, n_eff: float, disagreements) -> CandidateResult:
+def _result(s: Search, base, ref: Reference, n_eff: float, disagreements) -> CandidateResult:
     best = s.best
     sig = s.cls.signature
     if best is None:
@@ -406,7 +281,7 @@ def _result(s: _Search, base, ref: Reference, n_eff: float, disagreements) -> Ca
     if s.space.choice:
         params[s.space.choice[0]] = best.choice
     sigma = {}
-    q = _quadratic(s)
+    q = quadratic(s)
     for j, p in enumerate(s.space.params):
         su = math.inf
         if q is not None:
@@ -417,16 +292,47 @@ def _result(s: _Search, base, ref: Reference, n_eff: float, disagreements) -> Ca
                     su = math.sqrt(best.error_db ** 2 / n_eff * hinv[j, j])
             except np.linalg.LinAlgError:
                 pass
+        if not math.isfinite(su):
+            su = _conditional_sigma_u(s, j, best, n_eff)
         sigma[p.name] = p.sigma_from_u(params[p.name], su)
-    keys = ref.plan.keys
     explains = []
     for d in disagreements:
-        if d.key in keys:
-            r = best.residual_db[keys.index(d.key)]
-            if abs(r) <= 0.5 * abs(d.residual_db):
-                explains.append(d.key)
+        i = _matching_location(ref.plan, d)
+        if i is not None and abs(best.residual_db[i]) <= 0.5 * abs(d.residual_db):
+            explains.append(d.key)
     return CandidateResult(s.space.effect, sig, params, sigma, best.error_db, base.total_db, best.view_error_db,
                            _window(ref), len(s.trials), explains)
+
+
+def _conditional_sigma_u(s: Search, j: int, best: Trial, n_eff: float) -> float:
+    """1-sigma of parameter ``j`` with the others held at the best (a parabola in ``u_j`` through the points on
+    that line): the fallback when the joint quadratic is not positive definite (a valley between parameters).
+    Smaller than the profile value when parameters trade off."""
+    line = [t for t in s.trials if math.isfinite(t.error_db) and t.choice == best.choice
+            and np.allclose(np.delete(t.u, j), np.delete(best.u, j), atol=1e-6)]
+    line.sort(key=lambda t: abs(t.u[j] - best.u[j]))
+    line = line[:5]
+    if len({round(float(t.u[j]), 9) for t in line}) < 3:
+        return math.inf
+    u = np.array([t.u[j] - best.u[j] for t in line])
+    a2 = np.polyfit(u, [t.error_db ** 2 for t in line], 2)[0]
+    return math.sqrt(best.error_db ** 2 / (n_eff * 2 * a2)) if a2 > 0 else math.inf
+
+
+def _matching_location(plan, d) -> int | None:
+    """Index of disagreement ``d``'s location in ``plan``: the same key, or (lines found in the data, whose
+    keys carry their frequency) the nearest location of the same group within 2 bins."""
+    keys = plan.keys
+    if d.key in keys:
+        return keys.index(d.key)
+    if d.freq_hz is None:
+        return None
+    group = next((loc.group for loc in plan.locations if loc.view == d.view and "no order" in loc.group), None)
+    best, dist = None, 2 * plan.bin_hz
+    for i, loc in enumerate(plan.locations):
+        if loc.view == d.view and loc.group == group and loc.freq_hz is not None and abs(loc.freq_hz - d.freq_hz) <= dist:
+            best, dist = i, abs(loc.freq_hz - d.freq_hz)
+    return best
 
 
 def _window(ref: Reference) -> str:

@@ -30,7 +30,8 @@ import numpy as np
 from compare.error import Residuals, fit_gain_db, residuals
 from compare.measurement import Measurement
 from compare.speed import SpeedEstimate, constant_track, refine_speed
-from compare.views import Plan, SignalViews, analyse, make_plan, pinion_lines
+from compare.plan import Plan, make_plan
+from compare.views import SignalViews, analyse, pinion_lines
 from gearpit.errors import require
 
 #: extra pinion revolutions simulated beyond the measurement, so the model never has fewer
@@ -61,8 +62,9 @@ class Reference:
 
 
 def prepare_reference(measurement: Measurement, *, duration_s: float | None = None,
-                      speed: SpeedEstimate | None = None) -> Reference:
-    """Refine the speed, build the plan and analyse the measurement (optionally its first ``duration_s``)."""
+                      speed: SpeedEstimate | None = None, lines_from: Plan | None = None) -> Reference:
+    """Refine the speed, build the plan and analyse the measurement (optionally its first ``duration_s``;
+    ``lines_from``: take the lines at no order from that plan instead of finding them again)."""
     x = measurement.signal
     if speed is None:
         speed = refine_speed(measurement)
@@ -70,7 +72,7 @@ def prepare_reference(measurement: Measurement, *, duration_s: float | None = No
         n = min(len(x), int(round(duration_s * measurement.fs_hz)))
         x = x[:n]
     track = speed.track if duration_s is None else _crop_track(speed, len(x), measurement.fs_hz)
-    plan = make_plan(x, measurement.fs_hz, track, measurement.pair)
+    plan = make_plan(x, measurement.fs_hz, track, measurement.pair, lines_from=lines_from)
     views = analyse(x, measurement.fs_hz, track, plan, keep_curves=True)
     return Reference(measurement=measurement, x=np.asarray(x, float), speed=speed, plan=plan, views=views)
 

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from compare.error import location_weights
-from compare.views import INDICATORS, STATS
+from compare.plan import INDICATORS, STATS
 
 THRESHOLD_DB = 3.0
 MAX_LISTED = 20

@@ -37,7 +37,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from compare.views import VIEWS, Plan, SignalViews
+from compare.plan import VIEWS, Plan
+from compare.views import SignalViews
 
 VIEW_WEIGHTS = {"order": 1.0, "band": 1.0, "envelope": 1.0, "tsa": 1.0, "stats": 1.0}
 FLOOR_MARGIN_DB = 6.0

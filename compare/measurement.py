@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -187,7 +187,6 @@ class Measurement:
     sidecar: Sidecar
     source: str = ""
     fault: str | None = None
-    extra: dict = field(default_factory=dict)
 
     @property
     def signal(self) -> np.ndarray:

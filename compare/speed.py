@@ -1,8 +1,9 @@
 """The measured operating speed: refined from a tachometer or from the spectrum, and the shaft angle track.
 
 - With a tachometer: the pulse times (:func:`features.tsa.tacho_pulse_times`) give
-  the shaft angle at each pulse; a polynomial of degree <= 3 in time through
-  them (least squares) is the smooth angle track: slow drift is followed,
+  the shaft angle at each pulse; a straight line through them (least squares)
+  is the angle track, or a cubic when the pulses stray more than
+  :data:`DRIFT_RAD` (RMS) from a constant speed: slow drift is followed,
   fluctuations within a revolution are not (they stay visible in the views,
   as they would in the model).
 - Without: the mean pinion speed maximises the harmonic sum
@@ -28,6 +29,8 @@ from features.tsa import AngleTrack, tacho_pulse_times
 from gearpit.errors import require
 
 TWO_PI = 2.0 * np.pi
+#: RMS deviation (rad) of the pulse angles from a constant speed above which the track follows a drift
+DRIFT_RAD = 0.02
 
 
 @dataclass(frozen=True, eq=False)
@@ -71,9 +74,11 @@ def speed_from_tacho(tacho: np.ndarray, fs_hz: float, *, z_pinion: int, z_wheel:
     angle = TWO_PI * per_rev * np.arange(times.size) / pulses_per_rev
     n = len(tacho)
     duration = (n - 1) / fs_hz
-    deg = int(min(3, max(1, times.size // 8)))
     tc = times.mean()
-    coef = np.polyfit(times - tc, angle, deg)
+    coef = np.polyfit(times - tc, angle, 1)
+    drift = np.sqrt(np.mean((np.polyval(coef, times - tc) - angle) ** 2))
+    if drift > DRIFT_RAD and times.size >= 16:  # the speed drifts: follow it (cubic at most)
+        coef = np.polyfit(times - tc, angle, 3)
     grid = np.linspace(0.0, duration, 257)
     ang = np.polyval(coef, grid - tc)
     speed = np.polyval(np.polyder(coef), grid - tc)

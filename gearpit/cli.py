@@ -26,6 +26,7 @@ COMMAND_MODULES = [
     "gearpit.commands.train",
     "gearpit.commands.evaluate",
     "gearpit.commands.predict",
+    "gearpit.commands.compare",
 ]
 
 

@@ -1,8 +1,10 @@
 """A small multi-task 1-D convolutional network for gear-pitting diagnosis.
 
 Five strided convolution blocks (convolution, batch normalisation, ReLU) halve the
-length at each block; global average and max pooling make the network accept
-any input length; one shared hidden layer feeds three heads:
+length at each block; global average, maximum and root-mean-square pooling make
+the network accept any input length (the RMS pool lets it read energies such as
+the energy ratio of the TSA difference signal directly); one shared hidden layer
+feeds three heads:
 
 - ``severity_class``: logits over the severity classes;
 - ``severity``: the pitted fraction, a regression output (scaled by the training
@@ -71,8 +73,10 @@ class GearCNN(nn.Module):
         for i, w in enumerate(widths):
             blocks.append(_block(c, w, 9 if i == 0 else 5, "circular" if circular else "zeros"))
             c = w
-        self.features = nn.Sequential(*blocks)
-        self.shared = nn.Sequential(nn.Linear(2 * c, hidden), nn.ReLU(), nn.Dropout(dropout))
+        # batch-normalise each input channel: a channel of small values (the TSA difference signal) is scaled
+        # up by the batch statistics while its level relative to other records is kept
+        self.features = nn.Sequential(nn.BatchNorm1d(in_channels), *blocks)
+        self.shared = nn.Sequential(nn.Linear(3 * c, hidden), nn.ReLU(), nn.Dropout(dropout))
         self.severity_class = nn.Linear(hidden, n_severity_classes)
         self.severity = nn.Linear(hidden, 1)
         self.teeth = nn.Linear(hidden, n_teeth_classes)
@@ -80,7 +84,7 @@ class GearCNN(nn.Module):
     def forward(self, x: torch.Tensor) -> dict[str, torch.Tensor]:
         """``x``: (batch, channels, length) -> dict of head outputs (logits, scaled severity)."""
         h = self.features(x)
-        h = torch.cat([h.mean(dim=2), h.amax(dim=2)], dim=1)
+        h = torch.cat([h.mean(dim=2), h.amax(dim=2), torch.sqrt(h.square().mean(dim=2) + 1e-8)], dim=1)
         h = self.shared(h)
         return {"severity_class": self.severity_class(h), "severity": self.severity(h).squeeze(1),
                 "teeth": self.teeth(h)}

@@ -1,16 +1,20 @@
 """Input representations of vibration records for the classifiers.
 
-Every representation cuts one *segment* out of a record (where it starts is a
-fraction of the free room, so a random start is the "random phase / crop"
-augmentation and evenly spaced starts are test-time crops), normalises it per
-signal (zero mean, unit standard deviation) and returns a fixed-size array
-``(channels, length)``:
+Every record is first normalised (zero mean, unit standard deviation). Each
+representation then reads *segments* of it and returns a fixed-size array
+``(channels, length)``. Where the first segment starts is a fraction of the free
+room, so a random start is the "random phase / crop" augmentation and evenly
+spaced starts are test-time crops. The spectra average the power of every
+half-overlapping segment that fits in the record (Welch [4]_), and the TSA
+averages every whole revolution that fits (less one, the room for the start
+phase; at least ``n_revs``): a longer record gives a less noisy input of the
+same size.
 
 ``raw``
     the segment itself, ``n_samples`` samples (bound to the sampling rate).
 ``envelope``
-    log amplitude spectrum of the segment's envelope, first ``n_samples // 8``
-    bins, i.e. 0 to ``fs / 16`` (bound to the sampling rate).
+    log amplitude spectrum of the envelope of ``n_samples``-sample segments, first
+    ``n_samples // 8`` bins, i.e. 0 to ``fs / 16`` (bound to the sampling rate).
 ``tsa``
     two channels of ``samples_per_rev`` samples: the time-synchronous average of
     the pinion over ``n_revs`` revolutions (the FFT bins of an ``n_revs``-revolution
@@ -29,7 +33,7 @@ signal (zero mean, unit standard deviation) and returns a fixed-size array
     from a record whose sampling rate and tooth counts are unknown.
 
 Spectra are window-corrected Hann amplitude spectra, linearly interpolated from
-the FFT bins onto the order grid (the segment holds a whole number of
+the FFT bins onto the order grid (a segment holds a whole number of
 revolutions up to rounding to a sample, so bins and grid nearly coincide),
 compressed by ``log10(a + 1e-5)`` and standardised per signal and channel.
 
@@ -48,6 +52,8 @@ References
 .. [3] Lebold, M. et al. (2000). Review of vibration analysis methods for gearbox
    diagnostics and prognostics. Proc. 54th MFPT, 623-634 (regular, residual and
    difference signals).
+.. [4] Welch, P. D. (1967). The use of fast Fourier transform for the estimation
+   of power spectra. IEEE Transactions on Audio and Electroacoustics 15(2), 70-73.
 """
 from __future__ import annotations
 
@@ -189,25 +195,49 @@ def _difference_mask(n_orders: int, z_pinion: int) -> np.ndarray:
     return (k > 2) & ~near_mesh
 
 
+def _starts(size: int, n_seg: int, start: float, average: bool) -> list[int]:
+    """Segment starts: one at ``start`` of the free room, or (``average``) one every half
+    segment, the first shifted by ``start`` of at most half a segment."""
+    room = size - n_seg
+    if not average:
+        return [int(np.floor(start * room + 1e-9))]
+    hop = max(n_seg // 2, 1)
+    first = int(np.floor(start * min(room, hop - 1) + 1e-9))
+    return list(range(first, room + 1, hop))
+
+
+def _mean_amplitude(x: np.ndarray, n_seg: int, starts: list[int], envelope: bool) -> np.ndarray:
+    """Root-mean-square over the segments of the Hann amplitude spectrum (of the envelope if asked)."""
+    power = 0.0
+    for i0 in starts:
+        seg = x[i0:i0 + n_seg]
+        power = power + _hann_amplitude(_envelope(seg) if envelope else seg - seg.mean()) ** 2
+    return np.sqrt(power / len(starts))
+
+
 def _one(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, shaft_hz: float | None, mesh_cps: float | None,
          start: float, speed_factor: float, z_pinion: int) -> np.ndarray:
-    n_seg = spec.segment_length(fs_hz, shaft_hz, mesh_cps, speed_factor)
-    room = x.size - n_seg
-    i0 = int(np.floor(start * room + 1e-9))
-    seg = _normalise(x[i0:i0 + n_seg].astype(float))
+    x = _normalise(x.astype(float))
     k = spec.kind
-    if k in ("raw", "envelope"):
-        if n_seg != spec.n_samples:
-            seg = _normalise(resample(seg, spec.n_samples))
-        if k == "raw":
-            return seg[None, :]
-        amp = _hann_amplitude(_envelope(seg))
+    n_seg = spec.segment_length(fs_hz, shaft_hz, mesh_cps, speed_factor)
+    if k == "raw":
+        i0 = _starts(x.size, n_seg, start, False)[0]
+        seg = x[i0:i0 + n_seg]
+        return _normalise(resample(seg, spec.n_samples) if n_seg != spec.n_samples else seg)[None, :]
+    if k == "envelope":
+        if n_seg != spec.n_samples:  # speed error: stretch the record, then cut as usual
+            x = resample(x, int(round(x.size * spec.n_samples / n_seg)))
+        amp = _mean_amplitude(x, spec.n_samples, _starts(x.size, spec.n_samples, start, True), True)
         return _standardise(np.log10(amp[:spec.length] + LOG_FLOOR))[None, :]
     if k == "tsa":
+        # as many whole revolutions as the record holds, less one (room for the start phase), >= n_revs
+        rev = fs_hz / (shaft_hz * speed_factor)
+        n_rev = max(spec.n_revs, int(np.floor(x.size / rev)) - 1)
+        n_seg = min(int(round(n_rev * rev)), x.size)
+        i0 = _starts(x.size, n_seg, start, False)[0]
+        spec_c = np.fft.rfft(x[i0:i0 + n_seg])
         # bin j of the segment is shaft order j / (revolutions it holds): keep the integer orders
-        spec_c = np.fft.rfft(seg)
-        n_rev_exact = n_seg * (shaft_hz * speed_factor) / fs_hz
-        bins = np.arange(spec.samples_per_rev // 2 + 1) * n_rev_exact
+        bins = np.arange(spec.samples_per_rev // 2 + 1) * (n_seg / rev)
         idx = np.arange(spec_c.size)
         comb = np.interp(bins, idx, spec_c.real, right=0.0) + 1j * np.interp(bins, idx, spec_c.imag, right=0.0)
         avg = np.fft.irfft(comb, n=spec.samples_per_rev)
@@ -223,8 +253,9 @@ def _one(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, shaft_hz: float 
     else:
         unit = 1.0 / (n_seg * mesh_cps * speed_factor)
         step = 1.0 / spec.n_mesh_periods
-    a = _log_on_grid(_hann_amplitude(seg), unit, spec.length, step)
-    e = _log_on_grid(_hann_amplitude(_envelope(seg)), unit, spec.length, step)
+    starts = _starts(x.size, n_seg, start, True)
+    a = _log_on_grid(_mean_amplitude(x, n_seg, starts, False), unit, spec.length, step)
+    e = _log_on_grid(_mean_amplitude(x, n_seg, starts, True), unit, spec.length, step)
     return np.stack([a, e])
 
 

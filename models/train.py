@@ -73,20 +73,20 @@ class TrainConfig:
     representation: RepresentationSpec = field(default_factory=RepresentationSpec)
     task: str = "multi"
     augment: AugmentConfig = field(default_factory=AugmentConfig)
-    max_epochs: int = 40
-    patience: int = 8
-    batch_size: int = 32
-    learning_rate: float = 3e-3
+    max_epochs: int = 150
+    patience: int = 25
+    batch_size: int = 64
+    learning_rate: float = 2e-3
     weight_decay: float = 1e-4
     val_fraction: float = 0.2
     severity_weight: float = 1.0
     teeth_weight: float = 1.0
     widths: tuple[int, ...] = (16, 32, 48, 64, 96)
     hidden: int = 64
-    dropout: float = 0.2
+    dropout: float = 0.1
     seed: int = 0
     threads: int = 1
-    max_seconds: float = 600.0
+    max_seconds: float = 900.0
 
     def __post_init__(self):
         require(isinstance(self.representation, RepresentationSpec), "representation", self.representation,

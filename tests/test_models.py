@@ -59,6 +59,16 @@ def test_order_spectrum_peak_at_the_tone_order_for_any_speed_and_fs(speed_rpm, f
     assert int(np.argmax(r[0, 0])) == 13 * SMALL_REP.n_revs
 
 
+def test_mesh_order_axis_needs_only_cycles_per_sample():
+    """mesh_order: a tone at twice the mesh frequency peaks at index 2 * n_mesh_periods, for a record given
+    only its mesh frequency in cycles/sample (fs set to 1); exact index."""
+    spec = RepresentationSpec(kind="mesh_order", n_mesh_periods=64, max_order=4.0)
+    k = np.arange(8192)
+    x = np.cos(2 * np.pi * 2 * 0.0741 * k)[None, :]
+    r = represent(x, spec, fs_hz=1.0, mesh_cps=0.0741)
+    assert r.shape == (1, 2, 256) and int(np.argmax(r[0, 0])) == 128
+
+
 def test_speed_factor_moves_the_order_axis():
     """With speed factor s the representation assumes a speed s times the label: a tone at order 12
     appears at order 12 / s (s = 1.2 -> order 10, index 40); exact index."""
@@ -89,6 +99,23 @@ def test_tsa_keeps_the_synchronous_waveform_and_rejects_noise():
     avg = represent(x[None, :], spec, fs_hz=fs, shaft_hz=fr, z_pinion=13)[0, 0]
     ref = np.cos(3 * 2 * np.pi * np.arange(256) / 256)
     assert np.corrcoef(avg, ref)[0, 1] > 0.95
+
+
+def test_tsa_difference_channel_drops_mesh_harmonics_and_keeps_the_rest():
+    """Difference signal (Lebold et al. 2000): orders 0-2 and m z + {-1, 0, 1} removed. For z = 13, a record of
+    orders 1, 12, 13, 14, 26 leaves nothing (max |diff| < 1e-9 of the TSA scale), while an added order-7 tone
+    passes unchanged (channel 1 equals the order-7 part of channel 0, atol 1e-9)."""
+    fs, fr, z = 4096.0, 16.0, 13
+    t = np.arange(4096) / fs
+    mesh = sum(np.cos(2 * np.pi * k * fr * t + 0.1 * k) for k in (1, 12, 13, 14, 26))
+    spec = RepresentationSpec(kind="tsa", n_revs=16, samples_per_rev=256)
+    r = represent(mesh[None, :], spec, fs_hz=fs, shaft_hz=fr, z_pinion=z)[0]
+    assert np.abs(r[1]).max() < 1e-9
+    tone = 0.3 * np.cos(2 * np.pi * 7 * fr * t)
+    r2 = represent((mesh + tone)[None, :], spec, fs_hz=fs, shaft_hz=fr, z_pinion=z)[0]
+    scale = (mesh + tone)[:256].std()  # channels are scaled by the TSA's standard deviation
+    theta = 2 * np.pi * np.arange(256) / 256
+    np.testing.assert_allclose(r2[1], 0.3 * np.cos(7 * theta) / scale, atol=1e-9)
 
 
 def test_representations_are_normalised_per_signal():

@@ -1,0 +1,178 @@
+"""The comparison report: a JSON document (schema in :mod:`compare.schema`) and a self-contained HTML page.
+
+:func:`document` gathers everything a reader needs - operating point, sensor
+gain, error per view and in total, every location's measured and model level
+and residual (the residual map), the ranked disagreements, the candidate
+effects with fitted parameters and uncertainty, the unexplained disagreements
+and the ledger - as plain JSON. :func:`write_html` renders the same document,
+plus the measured-versus-model overlays of each view, as one HTML file whose
+figures are embedded PNGs (base64): no external files, no network.
+"""
+from __future__ import annotations
+
+import base64
+import html
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from compare.error import location_weights
+from gearpit import __version__
+from gearpit.atomic import atomic_path
+
+SCHEMA_ID = "gearpit.compare/1"
+
+
+def _num(v):
+    if v is None:
+        return None
+    v = float(v)
+    return v if math.isfinite(v) else None
+
+
+def document(comparison, attribution=None, ledger_rows=(), *, measurement_path: str | None = None,
+             model_path: str | None = None) -> dict:
+    """The JSON document of a comparison (schema: :data:`compare.schema.SCHEMA`)."""
+    ref, ev = comparison.reference, comparison.evaluation
+    m = ref.measurement
+    plan = ref.plan
+    w = location_weights(plan)
+    g = ev.residuals.gain_db
+    locations = []
+    for i, loc in enumerate(plan.locations):
+        locations.append({"key": loc.key, "view": loc.view, "group": loc.group, "label": loc.label,
+                          "freq_hz": _num(loc.freq_hz), "weight": float(w[i]),
+                          "measured_db": _num(ref.views.levels[i]),
+                          "model_db": _num(ev.views.levels[i] + (g if loc.gain else 0.0)),
+                          "floor_db": _num(np.fmax(ref.views.floors[i], ev.views.floors[i] + (g if loc.gain else 0.0))),
+                          "residual_db": _num(ev.residuals.residual_db[i])})
+    doc = {
+        "schema": SCHEMA_ID,
+        "software_version": __version__,
+        "measurement": {"path": measurement_path or m.source, "fs_hz": m.fs_hz, "n_samples": m.n_samples,
+                        "sensor": m.sensor, "tacho": m.tacho, "fault": m.fault,
+                        "speed_rpm_nominal": m.speed_rpm, "speed_rpm": ref.speed.speed_rpm,
+                        "speed_method": ref.speed.method, "torque_nm": m.torque_nm, "pair": m.pair.to_dict()},
+        "model": {"path": model_path, "description": comparison.model.describe(), "sensor": comparison.model.sensor,
+                  "effects": [e.to_dict() for e in comparison.model.effects]},
+        "gain_db": g,
+        "noise_added_rms": ev.noise_added_rms,
+        "error_db": {k: float(v) for k, v in comparison.error_db.items()},
+        "locations": locations,
+        "disagreements": [d.to_dict() for d in comparison.disagreements],
+        "attribution": attribution.to_dict() if attribution is not None else None,
+        "ledger": list(ledger_rows),
+    }
+    return json.loads(json.dumps(doc, default=_default))
+
+
+def _default(v):
+    if hasattr(v, "item"):
+        return v.item()
+    if isinstance(v, (tuple, set)):
+        return list(v)
+    return str(v)
+
+
+def write_json(doc: dict, path: str | Path) -> Path:
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(doc, indent=1, allow_nan=False), encoding="utf-8")
+    return Path(path)
+
+
+# ---------------------------------------------------------------------- HTML
+_CSS = """body{font-family:sans-serif;max-width:1100px;margin:1em auto;color:#222}
+table{border-collapse:collapse;font-size:13px;margin:.5em 0}td,th{border:1px solid #ccc;padding:2px 6px;text-align:left}
+th{background:#eee}.pos{color:#1f4e9c}.neg{color:#d9541e}.claimed{background:#e8f5e1}.flag{background:#fbe9e7}
+img{max-width:100%}h2{border-bottom:1px solid #ccc}code{background:#f4f4f4}"""
+
+
+def _img(png: bytes, alt: str) -> str:
+    return f'<img alt="{html.escape(alt)}" src="data:image/png;base64,{base64.b64encode(png).decode()}">'
+
+
+def _table(head: list, rows: list, cls=None) -> str:
+    out = ["<table><tr>" + "".join(f"<th>{html.escape(str(h))}</th>" for h in head) + "</tr>"]
+    for i, r in enumerate(rows):
+        c = f' class="{cls[i]}"' if cls and cls[i] else ""
+        out.append(f"<tr{c}>" + "".join(f"<td>{html.escape(str(v))}</td>" for v in r) + "</tr>")
+    return "".join(out) + "</table>"
+
+
+def _fmt(v, nd=3):
+    if v is None:
+        return "-"
+    if isinstance(v, float):
+        return f"{v:.{nd}g}"
+    return str(v)
+
+
+def write_html(comparison, doc: dict, path: str | Path) -> Path:
+    """Render ``doc`` (from :func:`document`) and the overlays of ``comparison`` as one HTML file."""
+    from compare import plots
+
+    e = doc["error_db"]
+    m = doc["measurement"]
+    parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>gearpit compare</title><style>{_CSS}</style>"
+             "</head><body>",
+             "<h1>Model versus measurement</h1>",
+             f"<p>Measurement <code>{html.escape(str(m['path']))}</code>: sensor <code>{html.escape(m['sensor'])}</code>, "
+             f"fs {m['fs_hz']:g} Hz, {m['n_samples']} samples; speed {m['speed_rpm']:.3f} rpm "
+             f"(nominal {m['speed_rpm_nominal']:g}, refined from the {m['speed_method']}), torque {m['torque_nm']:g} N m.</p>",
+             f"<p>Model: <code>{html.escape(doc['model']['description'])}</code>. Sensor gain fitted: "
+             f"{doc['gain_db']:+.2f} dB.</p>",
+             "<h2>Error</h2>",
+             _table(["view", "error (dB)"], [[k, f"{v:.3f}"] for k, v in e.items()]),
+             "<p>Definition: weighted RMS of the residuals in dB after the gain fit and the noise floors "
+             "(module <code>compare.error</code>); 0 for identical signals.</p>",
+             "<h2>Views: measured versus model</h2>",
+             _img(plots.order_spectrum(comparison), "order spectrum"),
+             _img(plots.location_levels(comparison, "order", "order view: mesh harmonics, sidebands, shaft orders"),
+                  "order levels"),
+             _img(plots.location_levels(comparison, "band", "band view: content at no shaft order"), "band levels"),
+             _img(plots.envelope_spectrum(comparison), "envelope spectrum"),
+             _img(plots.location_levels(comparison, "envelope", "envelope view"), "envelope levels"),
+             _img(plots.tsa(comparison), "TSA"),
+             _img(plots.location_levels(comparison, "tsa", "TSA view: tooth segments"), "tsa levels"),
+             _img(plots.location_levels(comparison, "stats", "statistics and condition indicators"), "stats"),
+             "<h2>Residual map</h2>", _img(plots.residual_map(comparison), "residual map"),
+             "<h2>Largest disagreements</h2>"]
+    dis = doc["disagreements"]
+    unexplained = {u["key"] for u in (doc["attribution"] or {}).get("unexplained", [])}
+    parts.append(_table(["#", "where it fails", "residual (dB)", "view", "unexplained"],
+                        [[i + 1, d["text"], f"{d['residual_db']:+.1f}", d["view"], "yes" if d["key"] in unexplained else ""]
+                         for i, d in enumerate(dis)],
+                        cls=["flag" if d["key"] in unexplained else "" for d in dis]) if dis else
+                 "<p>No disagreement above the threshold.</p>")
+    att = doc["attribution"]
+    if att is not None:
+        parts.append("<h2>Candidate effects</h2>")
+        rows, cls = [], []
+        for c in att["candidates"]:
+            ps = ", ".join(f"{k}={_fmt(v)}" + (f" \u00b1 {_fmt(c['sigma'].get(k))}" if k in c["sigma"] else "")
+                           for k, v in c["params"].items())
+            rows.append([c["effect"], f"{100 * c['reduction']:.1f} %", _fmt(c["error_db"]), _fmt(c["baseline_error_db"]),
+                         ps, c["window"], "claimed" if c["claimed"] else "", c["signature"]])
+            cls.append("claimed" if c["claimed"] else "")
+        table = _table(["effect", "error reduction", "error after (dB)", "before (dB)", "fitted parameters (1 sigma)",
+                        "window", "", "signature"], rows, cls)
+        parts.append(table)
+        parts.append(f"<p>{att['n_simulations']} simulations in {att['elapsed_s']:.1f} s. Sigma '-' means not "
+                     "identifiable from these views.</p>")
+        if att["unexplained"]:
+            parts.append("<p><b>Unexplained by every registered effect:</b></p><ul>"
+                         + "".join(f"<li>{html.escape(u['text'])}</li>" for u in att["unexplained"]) + "</ul>")
+    rows = doc["ledger"]
+    if rows:
+        parts.append("<h2>Ledger</h2>")
+        parts.append(_img(plots.ledger_history(rows), "ledger"))
+        parts.append(_table(["run", "time (UTC)", "model", "total (dB)", "claimed"],
+                            [[r.get("run"), r.get("time_utc"), r.get("model"), _fmt(r["error_db"].get("total")),
+                              r.get("claimed") or ""] for r in rows]))
+    parts.append(f"<p style='color:#888'>gearpit {html.escape(doc['software_version'])}, schema {doc['schema']}</p>"
+                 "</body></html>")
+    with atomic_path(path) as tmp:
+        tmp.write_text("\n".join(parts), encoding="utf-8")
+    return Path(path)

@@ -1,0 +1,90 @@
+"""JSON Schema (draft 2020-12) of the document ``gearpit compare --json`` writes (:func:`compare.report.document`).
+
+Units are in the key names (``_db``, ``_hz``, ``_rpm``, ``_nm``, ``_s``). Levels
+are dB (20 log10 of amplitudes, 10 log10 of powers and of moment ratios, see
+:mod:`compare.views`); ``residual_db`` is measured minus model after the sensor
+gain fit and the noise floors (:mod:`compare.error`); ``null`` stands for a
+value that does not exist (a floor of a statistic, an unbounded uncertainty).
+"""
+from __future__ import annotations
+
+_NUM = {"type": ["number", "null"]}
+_STR = {"type": ["string", "null"]}
+_ERRORS = {"type": "object", "required": ["total"], "additionalProperties": {"type": "number"}}
+
+SCHEMA = {
+    "$schema": "https://json-schema.org/draft/2020-12/schema",
+    "$id": "gearpit.compare/1",
+    "title": "gearpit model-versus-measurement comparison",
+    "type": "object",
+    "required": ["schema", "software_version", "measurement", "model", "gain_db", "error_db", "locations",
+                 "disagreements", "attribution", "ledger"],
+    "additionalProperties": False,
+    "properties": {
+        "schema": {"const": "gearpit.compare/1"},
+        "software_version": {"type": "string"},
+        "measurement": {
+            "type": "object",
+            "required": ["path", "fs_hz", "n_samples", "sensor", "speed_rpm", "speed_rpm_nominal", "speed_method",
+                         "torque_nm", "pair"],
+            "properties": {"path": {"type": "string"}, "fs_hz": {"type": "number"}, "n_samples": {"type": "integer"},
+                           "sensor": {"type": "string"}, "tacho": _STR, "fault": _STR,
+                           "speed_rpm": {"type": "number", "description": "refined mean pinion speed"},
+                           "speed_rpm_nominal": {"type": "number"},
+                           "speed_method": {"enum": ["tacho", "spectrum", "nominal"]},
+                           "torque_nm": {"type": "number"}, "pair": {"type": "object"}}},
+        "model": {"type": "object", "required": ["description", "sensor", "effects"],
+                  "properties": {"path": _STR, "description": {"type": "string"}, "sensor": {"type": "string"},
+                                 "effects": {"type": "array", "items": {"type": "object", "required": ["name"]}}}},
+        "gain_db": {"type": "number", "description": "fitted sensor gain, model -> measurement"},
+        "noise_added_rms": {"type": "number", "description": "white noise added to the model to match the floor"},
+        "error_db": _ERRORS,
+        "locations": {
+            "type": "array",
+            "description": "the residual map: every compared location",
+            "items": {"type": "object",
+                      "required": ["key", "view", "group", "label", "weight", "measured_db", "model_db", "residual_db"],
+                      "properties": {"key": {"type": "string"},
+                                     "view": {"enum": ["order", "band", "envelope", "tsa", "stats"]},
+                                     "group": {"type": "string"}, "label": {"type": "string"}, "freq_hz": _NUM,
+                                     "weight": {"type": "number"}, "measured_db": _NUM, "model_db": _NUM,
+                                     "floor_db": _NUM, "residual_db": _NUM}}},
+        "disagreements": {
+            "type": "array",
+            "description": "ranked by |residual_db|",
+            "items": {"type": "object", "required": ["key", "view", "label", "residual_db", "text"],
+                      "properties": {"key": {"type": "string"}, "view": {"type": "string"}, "label": {"type": "string"},
+                                     "residual_db": {"type": "number"}, "measured_db": {"type": "number"},
+                                     "model_db": {"type": "number"}, "freq_hz": _NUM, "weight": {"type": "number"},
+                                     "text": {"type": "string"}}}},
+        "attribution": {
+            "type": ["object", "null"],
+            "required": ["candidates", "unexplained", "claimed", "elapsed_s", "n_simulations"],
+            "properties": {
+                "candidates": {"type": "array", "description": "best first (largest error reduction)",
+                               "items": {"type": "object",
+                                         "required": ["effect", "params", "sigma", "error_db", "baseline_error_db",
+                                                      "reduction", "claimed", "status"],
+                                         "properties": {"effect": {"type": "string"}, "signature": {"type": "string"},
+                                                        "params": {"type": "object"},
+                                                        "sigma": {"type": "object",
+                                                                  "additionalProperties": _NUM,
+                                                                  "description": "1-sigma, null: not identifiable"},
+                                                        "error_db": _NUM, "baseline_error_db": {"type": "number"},
+                                                        "reduction": {"type": "number"},
+                                                        "view_error_db": {"type": "object"},
+                                                        "window": {"type": "string"},
+                                                        "n_evaluations": {"type": "integer"},
+                                                        "explains": {"type": "array", "items": {"type": "string"}},
+                                                        "claimed": {"type": "boolean"},
+                                                        "status": {"type": "string"}}}},
+                "unexplained": {"type": "array", "items": {"type": "object", "required": ["key", "text"]}},
+                "claimed": {"type": "array", "items": {"type": "string"}},
+                "elapsed_s": {"type": "number"}, "n_simulations": {"type": "integer"},
+                "group_seconds": {"type": "object"}}},
+        "ledger": {"type": "array",
+                   "items": {"type": "object", "required": ["run", "model", "error_db"],
+                             "properties": {"run": {"type": "integer"}, "model": {"type": "string"},
+                                            "error_db": _ERRORS}}},
+    },
+}

@@ -1,0 +1,180 @@
+"""The batched search of one effect's parameters: points, rounds, quadratic surrogate.
+
+A :class:`Search` holds an effect's :class:`compare.fitspace.FitSpace` and the
+points tried so far (:class:`Trial`, with the total error each gave). Each
+round function proposes the next points from those already evaluated; the
+caller (:mod:`compare.attribution`) simulates the points of every effect in one
+batch, so a round costs one :func:`datagen.simulate.simulate` call. Rounds:
+
+- :func:`round_a`: a grid of the first parameter (or the frequencies the
+  measurement points to, for a parameter in Hz); the second at its default, or
+  at three values when the first is a frequency;
+- :func:`round_b`: the second parameter's grid at the best first one (``rich``:
+  crossed with steps of the first), or a finer bracket of a lone parameter; the
+  string option's other values;
+- :func:`round_c`: steps around the best in every parameter;
+- :func:`round_d`: the minimum of :func:`quadratic`, a least-squares quadratic
+  surrogate of ``E^2`` over the points nearest the best, minimised within the
+  bounds by :func:`scipy.optimize.minimize` (L-BFGS-B).
+
+References
+----------
+Press, W. H. et al. (2007). Numerical Recipes, 3rd ed., sec. 10.2 and 15.6 (parabolic interpolation;
+    confidence limits from the curvature of the merit function).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import minimize
+
+from compare.fitspace import FitSpace, frequency_seeds, grid
+
+@dataclass
+class Trial:
+    values: dict
+    choice: object
+    u: np.ndarray
+    error_db: float = math.inf
+    residual_db: np.ndarray | None = None
+    view_error_db: dict = field(default_factory=dict)
+    note: str = ""
+
+
+class Search:
+    def __init__(self, cls, space: FitSpace):
+        self.cls = cls
+        self.space = space
+        self.trials: list[Trial] = []
+        self.choice = cls().params().get(space.choice[0]) if space.choice else None
+        self.default_choice = self.choice
+
+    def point(self, values: dict, choice=None) -> Trial:
+        choice = self.choice if choice is None else choice
+        u = np.array([p.to_u(values[p.name]) for p in self.space.params])
+        return Trial(values=dict(values), choice=choice, u=u)
+
+    def defaults(self) -> dict:
+        return {p.name: p.default for p in self.space.params}
+
+    @property
+    def best(self) -> Trial | None:
+        done = [t for t in self.trials if math.isfinite(t.error_db)]
+        return min(done, key=lambda t: t.error_db) if done else None
+
+    def build(self, t: Trial):
+        kw = dict(t.values)
+        if self.space.choice:
+            kw[self.space.choice[0]] = t.choice
+        return self.cls(**kw)
+
+    def seen(self, t: Trial) -> bool:
+        return any(np.allclose(t.u, s.u, atol=1e-4) and t.choice == s.choice for s in self.trials)
+
+
+def round_a(s: Search, ref_residual, ref) -> list[Trial]:
+    ps = s.space.params
+    if not ps:
+        return [s.point({})]
+    p0 = ps[0]
+    first = frequency_seeds(ref, ref_residual, p0) if p0.unit == "Hz" else grid(p0)
+    second = [None]
+    if len(ps) > 1:
+        second = list(grid(ps[1], 3)) if p0.unit == "Hz" else [ps[1].default]
+    out = []
+    for v0 in first:
+        for v1 in second:
+            vals = s.defaults()
+            vals[p0.name] = float(v0)
+            if v1 is not None:
+                vals[ps[1].name] = float(v1)
+            out.append(s.point(vals))
+    return out
+
+
+def _primary_steps(p, best_u: float, rich: bool) -> list[float]:
+    """Values of the first parameter around the best: +/- 1 % and 3 % for a frequency, else a third and two
+    thirds of the grid spacing; only the best itself unless ``rich``."""
+    if not rich:
+        return [float(p.from_u(best_u))]
+    v = float(p.from_u(best_u))
+    if p.unit == "Hz":
+        return [v * f for f in (0.98, 1.0, 1.02)]
+    return [float(p.from_u(best_u + du)) for du in (-1 / 12, 0.0, 1 / 12)]
+
+
+def round_b(s: Search, rich: bool = False) -> list[Trial]:
+    """Second parameter's grid at the best first one (``rich``: crossed with steps of the first, for
+    time-stepped effects whose batch costs the same whatever its size)."""
+    ps, best = s.space.params, s.best
+    if best is None:
+        return []
+    out = []
+    if len(ps) >= 2:
+        for v0 in _primary_steps(ps[0], best.u[0], rich):
+            for v in grid(ps[1], 5):
+                out.append(s.point({**best.values, ps[0].name: v0, ps[1].name: float(v)}))
+    elif len(ps) == 1:
+        step = 1.0 / (2 * 6)
+        for du in ((-2, -1.5, -1, -0.5, 0.5, 1, 1.5, 2) if rich else (-2, -1, 1, 2)):
+            du = du * step
+            out.append(s.point({ps[0].name: float(ps[0].from_u(best.u[0] + du))}))
+    if s.space.choice:
+        out += [s.point(best.values, c) for c in s.space.choice[1] if c != best.choice]
+    return [t for t in out if not s.seen(t)]
+
+
+def round_c(s: Search) -> list[Trial]:
+    ps, best = s.space.params, s.best
+    if best is None or not ps:
+        return []
+    s.choice = best.choice
+    out = []
+    for j, p in enumerate(ps):
+        step = (0.02 if p.unit == "Hz" else 1.0 / 18) if j == 0 else 1.0 / 15
+        for du in (-step, step):
+            u = best.u.copy()
+            u[j] = np.clip(u[j] + du, 0, 1)
+            out.append(s.point({q.name: float(q.from_u(u[i])) for i, q in enumerate(ps)}, best.choice))
+    return [t for t in out if not s.seen(t)]
+
+
+def quadratic(s: Search):
+    """Fit E^2 = c + g.u + 1/2 u'Hu on the points near the best; returns (u_min, H, E2_min) or None."""
+    best = s.best
+    pts = [t for t in s.trials if math.isfinite(t.error_db) and t.choice == best.choice]
+    n = len(s.space.params)
+    need = 1 + n + n * (n + 1) // 2
+    if n == 0 or len(pts) < need:
+        return None
+    pts.sort(key=lambda t: float(np.sum((t.u - best.u) ** 2)))
+    pts = pts[:max(need + 2, 2 * need)]
+    U = np.array([t.u - best.u for t in pts])
+    y = np.array([t.error_db ** 2 for t in pts])
+    cols = [np.ones(len(pts))] + [U[:, j] for j in range(n)]
+    pairs = [(i, j) for i in range(n) for j in range(i, n)]
+    cols += [U[:, i] * U[:, j] * (0.5 if i == j else 1.0) for i, j in pairs]
+    A = np.column_stack(cols)
+    coef, *_ = np.linalg.lstsq(A, y, rcond=None)
+    g = coef[1:1 + n]
+    H = np.zeros((n, n))
+    for (i, j), c in zip(pairs, coef[1 + n:]):
+        H[i, j] = H[j, i] = c
+
+    def f(u):
+        return coef[0] + g @ u + 0.5 * u @ H @ u
+
+    bounds = [(-bu, 1 - bu) for bu in best.u]
+    res = minimize(f, np.zeros(n), jac=lambda u: g + H @ u, bounds=bounds, method="L-BFGS-B")
+    return best.u + res.x, H, max(float(res.fun), 1e-12)
+
+
+def round_d(s: Search) -> list[Trial]:
+    q = quadratic(s)
+    if q is None:
+        return []
+    u = q[0]
+    t = s.point({p.name: float(p.from_u(u[j])) for j, p in enumerate(s.space.params)}, s.best.choice)
+    return [] if s.seen(t) else [t]

@@ -1,0 +1,129 @@
+"""Order-domain records and spectra shared by the plan and the views.
+
+A record is resampled on the pinion angle and on the wheel angle
+(:func:`features.tsa.angular_resample`, whole revolutions), so that shaft
+orders fall on spectral bins. Power spectra are window-corrected line powers
+``(2 |X| / sum w)^2`` (Hann). Floors: the 30 % quantile of the power of the
+non-order bins in blocks of ``2 FLOOR_HALF_WIDTH`` bins, divided by the same
+quantile of a unit-mean exponential variable (so: the mean noise power per
+bin), interpolated between blocks.
+
+References
+----------
+Randall, R. B. (2011). Vibration-based Condition Monitoring. Wiley, ch. 5 (order tracking).
+Harris, F. J. (1978). On the use of windows for harmonic analysis with the DFT. Proc. IEEE 66(1), 51-83.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from features.tsa import AngleTrack, angular_resample
+from gearpit.errors import require
+
+#: half width (bins) of the neighbourhood whose low quantile is a line's floor
+FLOOR_HALF_WIDTH = 60
+#: quantile used for floors, and the same quantile of a unit-mean exponential variable (power of noise)
+FLOOR_QUANTILE = 0.30
+EXP_Q = -np.log(1 - FLOOR_QUANTILE)
+#: bins either side of a shaft order that count as "at an order"
+ORDER_MASK_BINS = 2
+TINY = 1e-30
+
+
+def hann(n: int) -> np.ndarray:
+    """Periodic Hann window."""
+    return 0.5 - 0.5 * np.cos(2 * np.pi * np.arange(n) / n)
+
+
+def power_spectrum(x: np.ndarray) -> np.ndarray:
+    """Window-corrected line power ``(2 |X| / sum w)^2`` (Hann) of a mean-removed record."""
+    w = hann(x.size)
+    amp = 2.0 * np.abs(np.fft.rfft((x - x.mean()) * w)) / w.sum()
+    return amp**2
+
+
+def order_mask(n_bins: int, n_revs: int, ratio: float) -> np.ndarray:
+    """True for bins near an integer order of a shaft; ``ratio``: resampling-shaft orders per order of that shaft.
+
+    "Near" is ORDER_MASK_BINS bins, or 1 bin when the orders are fewer than 8 bins apart (short records).
+    """
+    k = np.arange(n_bins) / n_revs / ratio  # shaft order of each bin
+    dist = np.abs(k - np.round(k)) * n_revs * ratio  # distance in bins
+    half = ORDER_MASK_BINS if n_revs * ratio >= 8 else 1
+    return dist <= half + 1e-9
+
+
+def db(p, factor=10.0):
+    """``factor log10(p)`` with p floored at TINY."""
+    return factor * np.log10(np.maximum(np.asarray(p, float), TINY))
+
+
+@dataclass(frozen=True, eq=False)
+class AngleRecords:
+    """The record resampled on the pinion angle and on the wheel angle, whole revolutions."""
+
+    pinion: np.ndarray   # (R, N_p)
+    wheel: np.ndarray    # (R_w, N_w)
+
+
+def angle_records(x: np.ndarray, fs_hz: float, track: AngleTrack, plan) -> AngleRecords:
+    """Resample ``x`` (pinion angle ``track``) for the plan; refuses records shorter than the plan."""
+    ratio = plan.z_pinion / plan.z_wheel
+    rp = angular_resample(x, fs_hz, track, samples_per_rev=plan.samples_per_rev, oversample=2)
+    wt = AngleTrack(track.time_s, track.angle_rad * ratio)
+    rw = angular_resample(x, fs_hz, wt, samples_per_rev=plan.samples_per_rev_wheel, oversample=2)
+    require(rp.shape[0] >= plan.n_revs and rw.shape[0] >= plan.n_revs_wheel, "record",
+            f"{rp.shape[0]} pinion / {rw.shape[0]} wheel revolutions",
+            f">= {plan.n_revs} / {plan.n_revs_wheel} (as many as the measurement)")
+    return AngleRecords(rp[:plan.n_revs], rw[:plan.n_revs_wheel])
+
+
+def refined_bin(p: np.ndarray, b: int) -> float:
+    """Peak position between bins: vertex of the parabola through the log powers of bins b-1, b, b+1."""
+    if b <= 0 or b >= p.size - 1:
+        return float(b)
+    y0, y1, y2 = np.log(np.maximum(p[b - 1:b + 2], TINY))
+    den = y0 - 2 * y1 + y2
+    return float(b + (0.5 * (y0 - y2) / den if den < 0 else 0.0))
+
+
+def non_order(n_bins: int, plan) -> np.ndarray:
+    """Bins at no integer order of either shaft in the pinion-angle spectrum."""
+    return ~(order_mask(n_bins, plan.n_revs, 1.0) | order_mask(n_bins, plan.n_revs, plan.z_pinion / plan.z_wheel))
+
+
+def non_order_wheel(n_bins: int, plan) -> np.ndarray:
+    """Non-order bins of the wheel-angle spectrum (bin = 1/R_w wheel orders)."""
+    ratio_w = plan.z_wheel / plan.z_pinion  # wheel orders per pinion order
+    return ~(order_mask(n_bins, plan.n_revs_wheel, 1.0) | order_mask(n_bins, plan.n_revs_wheel, ratio_w))
+
+
+def smooth_floor(p: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    """Floor at every bin: the FLOOR_QUANTILE of blocks of 2*FLOOR_HALF_WIDTH bins (masked bins left out,
+    unless fewer than 8 remain), divided by that quantile of a unit-mean exponential, interpolated."""
+    b = 2 * FLOOR_HALF_WIDTH
+    n_blocks = int(np.ceil(p.size / b))
+    pad = n_blocks * b - p.size
+    blocks = np.pad(p, (0, pad), constant_values=np.nan).reshape(n_blocks, b)
+    masked = np.where(np.pad(ok, (0, pad), constant_values=False).reshape(n_blocks, b), blocks, np.nan)
+    enough = np.sum(np.isfinite(masked), axis=1) >= 8
+    src = np.sort(np.where(np.isfinite(np.where(enough[:, None], masked, blocks)),
+                           np.where(enough[:, None], masked, blocks), np.inf), axis=1)
+    n_valid = np.sum(np.isfinite(src), axis=1)
+    idx = np.floor(FLOOR_QUANTILE * (np.maximum(n_valid, 1) - 1)).astype(int)
+    vals = src[np.arange(n_blocks), idx] / EXP_Q
+    centres = np.arange(n_blocks) * b + b / 2
+    return np.maximum(np.interp(np.arange(p.size), centres, vals), TINY)
+
+
+def envelope_power(xa: np.ndarray, plan) -> np.ndarray:
+    """Power spectrum of the envelope of ``xa`` band-passed to the plan's envelope band (ideal FFT filter)."""
+    n = xa.size
+    fs_eq = plan.samples_per_rev * plan.fr_pinion_hz
+    spec = np.fft.fft(xa - xa.mean())
+    f = np.fft.fftfreq(n, 1.0 / fs_eq)
+    lo, hi = plan.envelope_band_hz
+    env = np.abs(np.fft.ifft(spec * np.where((f >= lo) & (f <= hi), 2.0, 0.0)))
+    return power_spectrum(env)

@@ -1,0 +1,101 @@
+"""Benchmark of the classifiers: CNN training time on the default dataset and inference throughput.
+
+Run: ``python experiments/bench_models.py`` (the default dataset, ``experiments/models_sweeps/default*.toml``,
+is generated into ``experiments/out/models/data`` first if it is not there: ~5 min).
+
+- training: the CNN with the protocol's configuration (``tsa`` representation, the default
+  :class:`models.train.TrainConfig`: at most 150 epochs, early stopping) on the whole default dataset;
+  target < 5 min on 2 cores;
+- inference: ``CNNClassifier.predict`` (representation + network, 1 and 3 test-time crops) on 1024
+  records; target >= 500 signals/s;
+- reference measured in the same run: computing the representation alone (numpy FFTs), the floor
+  of any model that uses it. Ratios are against it.
+
+The last line is a JSON object.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from models.representations import RepresentationSpec, represent  # noqa: E402
+from models.train import TrainConfig, train_cnn  # noqa: E402
+
+TRAIN_TARGET_S = 300.0
+THROUGHPUT_TARGET = 500.0
+
+
+def default_dataset(data_dir: Path):
+    sys.path.insert(0, str(ROOT / "experiments"))
+    from eval_protocol import dataset
+
+    return dataset("default", data_dir)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--data-dir", type=Path, default=ROOT / "experiments" / "out" / "models" / "data")
+    ap.add_argument("--representation", default="tsa", choices=("tsa", "order"))
+    ap.add_argument("--threads", type=int, default=1, choices=(1, 2))
+    args = ap.parse_args(argv)
+    import torch
+
+    torch.set_num_threads(args.threads)
+    data = default_dataset(args.data_dir)
+    rep = (RepresentationSpec(kind="tsa", n_revs=8, samples_per_rev=1024) if args.representation == "tsa"
+           else RepresentationSpec(kind="order", n_revs=8, max_order=100.0))
+    print(f"default dataset: {len(data)} records x {data.n_samples} samples at {data.fs_hz:g} Hz")
+
+    # reference: the representation alone, once over the training records
+    t0 = time.perf_counter()
+    represent(data.signals, rep, fs_hz=data.fs_hz, shaft_hz=data.shaft_hz(), z_pinion=data.pair.z_pinion, starts=0.5)
+    t_rep = time.perf_counter() - t0
+
+    cfg = TrainConfig(representation=rep, seed=0, threads=args.threads)
+    t0 = time.perf_counter()
+    model = train_cnn(data, cfg)
+    t_train = time.perf_counter() - t0
+    tr = model.spec.training
+    print(f"training: {t_train:.1f} s ({tr['epochs_run']} epochs, best {tr['best_epoch']}, "
+          f"{tr['n_parameters']} parameters, val acc {tr['val_accuracy']:.3f}, teeth {tr['val_teeth_accuracy']:.3f}); "
+          f"target < {TRAIN_TARGET_S:.0f} s")
+    print(f"reference: one pass of the representation over the dataset {t_rep:.2f} s; training = {t_train / t_rep:.0f}x that")
+
+    n = 1024
+    idx = np.arange(n) % len(data)
+    batch = data.subset(idx)
+    model.predict(batch.subset(np.arange(32)), n_crops=1)  # warm-up
+    rates = {}
+    for crops in (1, 3):
+        t0 = time.perf_counter()
+        model.predict(batch, n_crops=crops, threads=args.threads)
+        rates[crops] = n / (time.perf_counter() - t0)
+    t0 = time.perf_counter()
+    represent(batch.signals, rep, fs_hz=batch.fs_hz, shaft_hz=batch.shaft_hz(), z_pinion=batch.pair.z_pinion, starts=0.5)
+    ref_rate = n / (time.perf_counter() - t0)
+    print(f"inference: {rates[1]:.0f} signals/s (1 crop), {rates[3]:.0f} signals/s (3 crops, the CLI default); "
+          f"target >= {THROUGHPUT_TARGET:.0f}")
+    print(f"reference: representation alone {ref_rate:.0f} signals/s; predict (1 crop) runs at "
+          f"{rates[1] / ref_rate:.2f} of it")
+    result = {"benchmark": "models", "representation": rep.kind, "threads": args.threads, "n_records": len(data),
+              "train_seconds": round(t_train, 1), "epochs": tr["epochs_run"], "n_parameters": tr["n_parameters"],
+              "train_target_seconds": TRAIN_TARGET_S, "train_ok": t_train < TRAIN_TARGET_S,
+              "signals_per_second_1crop": round(rates[1], 1), "signals_per_second_3crops": round(rates[3], 1),
+              "throughput_target": THROUGHPUT_TARGET, "throughput_ok": rates[3] >= THROUGHPUT_TARGET,
+              "reference_representation_seconds": round(t_rep, 2), "train_over_reference": round(t_train / t_rep, 1),
+              "reference_signals_per_second": round(ref_rate, 1),
+              "predict_over_reference": round(rates[1] / ref_rate, 3)}
+    print(json.dumps(result))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

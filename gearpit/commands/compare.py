@@ -1,0 +1,55 @@
+"""``gearpit compare``: a measurement versus the model -> error per view, disagreements, missing effects, ledger."""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+
+def register(sub) -> None:
+    p = sub.add_parser("compare", help="compare a measured vibration record with the model; rank missing effects",
+                       description=__doc__)
+    p.add_argument("measurement", type=Path, help="CSV/TXT, NPY, NPZ, WAV or MAT file (see the README for the format)")
+    p.add_argument("--meta", type=Path, help="sidecar JSON/TOML (default: <measurement stem>.toml/.json beside it)")
+    p.add_argument("--model", type=Path, help="model TOML (default: <measurement stem>.model.toml; created if missing)")
+    p.add_argument("--add", action="append", default=[], metavar="EFFECT[:param=value,...]",
+                   help="add an effect to the model file (without values: the parameters last fitted); repeatable")
+    p.add_argument("--plugin", action="append", default=[], type=str, metavar="FILE.py",
+                   help="Python file registering user effects; recorded in the model; repeatable")
+    p.add_argument("--candidates", help="comma-separated effects to try (default: every registered one not in the model)")
+    p.add_argument("--no-attribution", action="store_true", help="only compare; do not fit missing effects")
+    p.add_argument("--report", type=Path, help="write a self-contained HTML report")
+    p.add_argument("--json", type=Path, help="write the JSON document (schema gearpit.compare/1)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the noise matched to the measured floor")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from compare.ledger import history_table
+    from compare.workflow import run as run_loop
+
+    cands = [c.strip() for c in args.candidates.split(",") if c.strip()] if args.candidates else None
+    out = run_loop(args.measurement, meta=args.meta, model_path=args.model, add=args.add, plugins=args.plugin,
+                   attribution=not args.no_attribution, candidates=cands, report=args.report, json_path=args.json,
+                   seed=args.seed)
+    c = out.comparison
+    for msg in out.messages:
+        print(msg)
+    ref = c.reference
+    print(f"speed {ref.speed.speed_rpm:.3f} rpm ({ref.speed.method}), sensor gain {c.evaluation.residuals.gain_db:+.2f} dB")
+    print("error (dB): " + ", ".join(f"{k} {v:.2f}" for k, v in c.error_db.items()))
+    if c.disagreements:
+        print("largest disagreements:")
+        for d in c.disagreements[:10]:
+            print(f"  {d.text}")
+    if out.attribution is not None:
+        print("candidate effects (error reduction, fitted parameters +/- 1 sigma):")
+        for cand in out.attribution.candidates:
+            ps = ", ".join(f"{k}={v:.4g} +/- {cand.sigma[k]:.2g}" if k in cand.sigma else f"{k}={v}"
+                           for k, v in cand.params.items())
+            mark = "  <- claimed" if cand.claimed else ""
+            print(f"  {cand.effect:20s} {100 * cand.reduction:6.1f} %  {ps}{mark}")
+        for u in out.attribution.unexplained:
+            print(f"  unexplained by every registered effect: {u['text']}")
+    print("ledger:")
+    print(history_table(out.ledger))
+    return 0

@@ -1,0 +1,18 @@
+"""Classifiers of gear-pitting records, one module per job.
+
+- ``data``            :class:`SignalSet` (records, fs, gear pair, labels) and :class:`PairInfo`
+- ``sources``         signal sets from a generated dataset or from measurement files (+ labels.csv)
+- ``unknown_rate``    records whose sampling rate is unknown (the SpectraQuest CSVs): mesh-frequency estimate
+- ``toy``             a small labelled toy signal set for tests, benchmarks and examples
+- ``representations`` network inputs: raw segment, envelope spectrum, TSA, order and mesh-order spectra
+- ``augment``         training-time augmentation (crop/phase, gain, noise, speed error, polarity)
+- ``cnn``             the multi-task 1-D CNN (severity class, severity fraction, pitted-teeth class)
+- ``train``           :class:`TrainConfig` and :func:`train_cnn` (split, loss, early stopping, seeds)
+- ``classifier``      :class:`CNNClassifier`: a trained network with its spec; prediction
+- ``baselines``       feature-table baselines (logistic regression, random forest, gradient boosting),
+                      exported to plain arrays
+- ``spec``            :class:`ModelSpec` (input spec, classes, ranges, config), input checks, :class:`Predictions`
+- ``io``              save / load without pickle (state_dict + JSON, npz + JSON)
+- ``evaluate``        accuracy, macro-F1, confusion matrices, severity MAE, breakdowns; JSON and Markdown
+- ``plots``           figures of an evaluation (the only module that draws)
+"""
