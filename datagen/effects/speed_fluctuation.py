@@ -52,6 +52,12 @@ def check_frequency(effect) -> None:
                          "> 0, or order > 0 (the fluctuation frequency is frequency_hz + order * pinion speed)")
 
 
+def modulation(effect, t_s, ctx) -> np.ndarray:
+    """``1 + a sin(2 pi f t + phi)`` of a fluctuation effect (fields amplitude_fraction, frequency_hz, order, phase_rad)."""
+    f = fluctuation_frequency_hz(effect.frequency_hz, effect.order, ctx.speed_rpm)
+    return 1.0 + effect.amplitude_fraction * np.sin(2.0 * np.pi * f * np.asarray(t_s, dtype=float) + effect.phase_rad)
+
+
 @register
 @dataclass(frozen=True)
 class SpeedFluctuation(Effect):
@@ -81,9 +87,7 @@ class SpeedFluctuation(Effect):
         check_frequency(self)
 
     def operating_point(self, t_s, speed_rpm, torque_nm, ctx):
-        f = fluctuation_frequency_hz(self.frequency_hz, self.order, ctx.speed_rpm)
-        mod = 1.0 + self.amplitude_fraction * np.sin(2.0 * np.pi * f * np.asarray(t_s, dtype=float) + self.phase_rad)
-        return np.asarray(speed_rpm, dtype=float) * mod, torque_nm
+        return np.asarray(speed_rpm, dtype=float) * modulation(self, t_s, ctx), torque_nm
 
 
-__all__ = ["SpeedFluctuation", "fluctuation_frequency_hz", "check_frequency"]
+__all__ = ["SpeedFluctuation", "fluctuation_frequency_hz", "check_frequency", "modulation"]

@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from datagen.effects.base import Effect, register
-from datagen.effects.speed_fluctuation import check_frequency, fluctuation_frequency_hz
+from datagen.effects.speed_fluctuation import check_frequency, modulation
 
 
 @register
@@ -65,9 +65,7 @@ class TorqueFluctuation(Effect):
         check_frequency(self)
 
     def operating_point(self, t_s, speed_rpm, torque_nm, ctx):
-        f = fluctuation_frequency_hz(self.frequency_hz, self.order, ctx.speed_rpm)
-        mod = 1.0 + self.amplitude_fraction * np.sin(2.0 * np.pi * f * np.asarray(t_s, dtype=float) + self.phase_rad)
-        return speed_rpm, np.asarray(torque_nm, dtype=float) * mod
+        return speed_rpm, np.asarray(torque_nm, dtype=float) * modulation(self, t_s, ctx)
 
 
 __all__ = ["TorqueFluctuation"]
