@@ -3,13 +3,19 @@
 - ``formats``       readers: CSV/TXT, NPY, NPZ, WAV, MAT (v7.3 via h5py), MCC5-THU, PHM 2023, SEU layouts
 - ``measurement``   sidecar (JSON/TOML), loading and validation -> :class:`Measurement`
 - ``speed``         speed refined from the tachometer or the mesh harmonics; the shaft angle track
-- ``views``         order, band, envelope, TSA and statistics views: levels (dB) at named locations
-- ``error``         sensor gain fit, noise-floor matching, residuals, the scalar error per view and in total
+- ``spectra``       order-domain records (pinion and wheel angle), power and envelope spectra, noise floors
+- ``plan``          the named physical locations of a comparison, fixed once from the measurement
+- ``views``         order, band, envelope, TSA and statistics views: levels (dB) at the plan's locations
+- ``error``         sensor gain fit, noise floors, residuals, the scalar error per view and in total
 - ``model``         the comparison model (TOML the user edits): drive train, effects, plugins -> simulation cases
-- ``comparison``    one comparison end to end (measurement + model -> :class:`Comparison`)
+- ``comparison``    one comparison end to end (measurement + model -> :class:`Comparison`), noise matching
 - ``disagreements`` the largest disagreements, ranked, in physical terms
+- ``fitspace``      which parameters of an effect are fitted, on which scale, from which starting points
+- ``search``        the batched search rounds and the quadratic surrogate
 - ``attribution``   fit every missing registered effect, rank by error reduction, flag the unexplained
 - ``ledger``        append-only history of comparisons next to the model
-- ``report``        self-contained HTML report and the JSON document (schema in ``schema``)
+- ``report``        the JSON document and the self-contained HTML report (schema in ``schema``)
 - ``plots``         figures (matplotlib, Agg) - the only module that draws
+- ``workflow``      the user's loop in one call (used by ``gearpit compare`` and the walkthrough)
+- ``synthetic``     simulated 'measurements' with a hidden effect and nuisances (tests, walkthrough, benchmark)
 """

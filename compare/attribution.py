@@ -294,7 +294,8 @@ def _result(s: Search, base, ref: Reference, n_eff: float, disagreements) -> Can
                 pass
         if not math.isfinite(su):
             su = _conditional_sigma_u(s, j, best, n_eff)
-        sigma[p.name] = p.sigma_from_u(params[p.name], su)
+        sg = p.sigma_from_u(params[p.name], su)
+        sigma[p.name] = sg if sg <= p.hi - p.lo else math.inf  # wider than the bounds: not identifiable
     explains = []
     for d in disagreements:
         i = _matching_location(ref.plan, d)
