@@ -1,0 +1,80 @@
+"""Gear pairs at the file boundary: TOML / dict with units in the key names (mm, deg, GPa).
+
+``pair_from_dict`` and ``load_pair`` are re-exported by :mod:`datagen.geometry`.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from datagen.geometry import Gear, GearPair, Material, preset
+from gearpit.errors import InputError
+from gearpit.tomlio import check_keys, read_toml
+
+_PAIR_KEYS = {"name", "preset", "module_n_mm", "pressure_angle_n_deg", "helix_angle_deg", "addendum_coef",
+              "dedendum_coef", "pinion", "wheel", "material"}
+_GEAR_KEYS = {"teeth", "face_width_mm", "profile_shift", "bore_radius_mm"}
+_MAT_KEYS = {"youngs_modulus_gpa", "poisson", "density_kg_m3"}
+
+
+_POSITIVE_KEYS = {"face_width_mm", "bore_radius_mm", "module_n_mm", "youngs_modulus_gpa", "density_kg_m3"}
+
+
+def _num(table: dict, key: str, where: str, default=None):
+    v = table.get(key, default)
+    name = f"{where}.{key}" if where else key
+    if v is None:
+        raise InputError(name, None, "a value (this key is required)")
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        raise InputError(name, v, "a finite number")
+    if key in _POSITIVE_KEYS and v <= 0:
+        raise InputError(name, v, "a number > 0")
+    return v
+
+
+def pair_from_dict(d: dict, where: str = "pair") -> GearPair:
+    """Build a :class:`GearPair` from its TOML form (units in key names: mm, deg, GPa).
+
+    A ``preset = "name"`` key starts from a preset; other keys override it.
+    """
+    if not isinstance(d, dict):
+        raise InputError(where, d, "a table of gear-pair keys")
+    check_keys(d, _PAIR_KEYS, where)
+    base = preset(d["preset"]).to_dict() if "preset" in d else {}
+    merged = {**base, **{k: v for k, v in d.items() if k not in ("preset", "pinion", "wheel", "material")}}
+    for sub in ("pinion", "wheel", "material"):
+        if sub in d:
+            if not isinstance(d[sub], dict):
+                raise InputError(f"{where}.{sub}", d[sub], "a table")
+            merged[sub] = {**base.get(sub, {}), **d[sub]}
+    gears = {}
+    for w in ("pinion", "wheel"):
+        t = merged.get(w)
+        if t is None:
+            raise InputError(f"{where}.{w}", None, "a table with teeth, face_width_mm (required)")
+        check_keys(t, _GEAR_KEYS, f"{where}.{w}", required={"teeth", "face_width_mm"})
+        teeth = t["teeth"]
+        if isinstance(teeth, bool) or not isinstance(teeth, int):
+            raise InputError(f"{where}.{w}.teeth", teeth, "an integer >= 5")
+        gears[w] = Gear(teeth=teeth, face_width_m=_num(t, "face_width_mm", f"{where}.{w}") * 1e-3,
+                        profile_shift=_num(t, "profile_shift", f"{where}.{w}", 0.0),
+                        bore_radius_m=_num(t, "bore_radius_mm", f"{where}.{w}", 10.0) * 1e-3)
+    m = merged.get("material", {})
+    check_keys(m, _MAT_KEYS, f"{where}.material")
+    mat = Material(youngs_modulus_pa=_num(m, "youngs_modulus_gpa", f"{where}.material", 210.0) * 1e9,
+                   poisson=_num(m, "poisson", f"{where}.material", 0.3),
+                   density_kg_m3=_num(m, "density_kg_m3", f"{where}.material", 7850.0))
+    return GearPair(
+        pinion=gears["pinion"], wheel=gears["wheel"],
+        module_n_m=_num(merged, "module_n_mm", where) * 1e-3,
+        pressure_angle_n_rad=math.radians(_num(merged, "pressure_angle_n_deg", where, 20.0)),
+        helix_angle_rad=math.radians(_num(merged, "helix_angle_deg", where, 0.0)),
+        addendum_coef=_num(merged, "addendum_coef", where, 1.0),
+        dedendum_coef=_num(merged, "dedendum_coef", where, 1.25),
+        material=mat, name=str(merged.get("name", "custom")))
+
+
+def load_pair(path: str | Path) -> GearPair:
+    """Read a gear pair from a TOML file (a ``[pair]`` table or top-level keys)."""
+    d = read_toml(path)
+    return pair_from_dict(d["pair"] if "pair" in d else d)
