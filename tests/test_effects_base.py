@@ -186,3 +186,25 @@ def test_generalized_force_hook_reaches_the_right_dof():
     z1, z2 = SPUR.pinion.teeth, SPUR.wheel.teeth
     expected = (11.3 + 2.0 * z1 / z2) / SPUR.base_radius_m("pinion")
     assert np.mean(s.channels["mesh_force_n"]) == pytest.approx(expected, rel=1e-3)
+
+
+def test_coloured_noise_snr_and_spectral_slope():
+    """Noise effect: the requested SNR holds for every colour (0.3 dB) and the PSD slope of the added noise is
+    0, -1, -2 decades per decade for white, pink, brown (Welch estimate, 0.25 tolerance)."""
+    from scipy.signal import welch
+
+    from datagen.effects import get
+    from datagen.effects.base import EffectContext
+    from datagen.geometry import spur_pair_example
+
+    ctx = EffectContext(pair=spur_pair_example(), speed_rpm=1000.0, torque_nm=10.0, fs_hz=10000.0, duration_s=2.0)
+    x = np.sin(2 * np.pi * 480 * np.arange(20000) / 1e4)
+    for colour, slope in (("white", 0.0), ("pink", -1.0), ("brown", -2.0)):
+        eff = get("noise")(snr_db=20.0, colour=colour)
+        out = eff.measurement({"acc_pinion_loa_m_s2": x}, 1e4, np.random.default_rng(0), ctx)
+        n = out["acc_pinion_loa_m_s2"] - x
+        assert 20 * np.log10(np.std(x) / np.std(n)) == pytest.approx(20.0, abs=0.3)
+        f, p = welch(n, fs=1e4, nperseg=2048)
+        band = (f > 20) & (f < 2000)
+        fitted = np.polyfit(np.log10(f[band]), np.log10(p[band]), 1)[0]
+        assert fitted == pytest.approx(slope, abs=0.25)

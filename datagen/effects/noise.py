@@ -1,4 +1,8 @@
-"""Measurement noise: white Gaussian noise at a signal-to-noise ratio (hook 7).
+"""Measurement noise: white or coloured Gaussian noise at a signal-to-noise ratio (hook 7).
+
+Coloured noise has a power spectral density ~ 1/f^alpha: ``pink`` (alpha = 1) and ``brown`` (alpha = 2),
+made by shaping white Gaussian noise in the frequency domain (amplitude ~ f^(-alpha/2), DC removed) and
+scaling the result to the requested SNR over the whole record.
 
 References
 ----------
@@ -27,9 +31,10 @@ class Noise(Effect):
     """
 
     name = "noise"
-    signature = "broadband floor: raises all bands evenly, no orders, no envelope lines"
+    signature = "broadband floor (white: flat; pink/brown: rising towards low frequencies), no orders, no envelope lines"
     snr_db: float = field(default=40.0, metadata={"unit": "dB", "bounds": (-20.0, 120.0)})
     channels: str = field(default="acceleration", metadata={"unit": "-", "choices": ("acceleration", "all")})
+    colour: str = field(default="white", metadata={"unit": "-", "choices": ("white", "pink", "brown")})
 
     def measurement(self, channels, fs_hz, rng, ctx):
         out = dict(channels)
@@ -38,5 +43,23 @@ class Noise(Effect):
                 continue
             x = channels[key]
             rms = float(np.std(x))
-            out[key] = x + rng.standard_normal(x.shape) * rms * 10.0 ** (-self.snr_db / 20.0)
+            n = coloured_noise(x.size, self.colour, rng)
+            out[key] = x + n * rms * 10.0 ** (-self.snr_db / 20.0)
         return out
+
+
+#: PSD exponent alpha of each noise colour (PSD ~ 1 / f^alpha)
+COLOUR_EXPONENT = {"white": 0.0, "pink": 1.0, "brown": 2.0}
+
+
+def coloured_noise(n: int, colour: str, rng: np.random.Generator) -> np.ndarray:
+    """Unit-rms Gaussian noise of ``n`` samples with PSD ~ 1/f^alpha (``white``, ``pink``, ``brown``)."""
+    w = rng.standard_normal(n)
+    alpha = COLOUR_EXPONENT[colour]
+    if alpha == 0.0:
+        return w
+    spec = np.fft.rfft(w)
+    f = np.arange(spec.size, dtype=float)
+    f[0] = np.inf  # no DC
+    y = np.fft.irfft(spec * f ** (-alpha / 2.0), n)
+    return y / np.std(y)
