@@ -5,8 +5,9 @@ Stages (each writes into its own folder under ``--out``):
 1. ``stiffness``: healthy and pitted mesh stiffness of both preset pairs (CSV, PNG, JSON).
 2. ``simulate``: a healthy and a pitted simulation of each preset pair (CSV, NPZ, JSON, PNG).
 3. ``dataset``: a tiny labelled dataset from the embedded demo sweep (Parquet index + .npy shards).
-4. ``models``: the CNN trained on a small dataset of the demo sweep's classes and evaluated on held-out records.
-5. ``compare``: one full model-vs-measurement loop on a "measurement" simulated with a hidden pitch error and
+4. ``features``: the feature table (incl. HHT) of the demo dataset and the ranking of every feature.
+5. ``models``: the CNN trained on a small dataset of the demo sweep's classes and evaluated on held-out records.
+6. ``compare``: one full model-vs-measurement loop on a "measurement" simulated with a hidden pitch error and
    nuisance physics unlike the model's: compare, rank the candidate effects, add the claimed one, compare again.
 
 Later stages are appended to :data:`STAGES` as the pipeline grows.
@@ -90,6 +91,19 @@ def stage_dataset(out: Path) -> dict:
     return {k: info[k] for k in ("n_samples", "class_counts", "size_bytes", "fingerprint") if k in info}
 
 
+def stage_features(out: Path) -> dict:
+    """``gearpit rank-features`` on the demo dataset (stage 3), with EMD; the five best features."""
+    import pandas as pd
+
+    from gearpit.cli import main
+
+    code = main(["rank-features", str(out.parent / "dataset"), "--out", str(out), "--hht", "emd", "--jobs", "2"])
+    if code != 0:
+        raise RuntimeError(f"rank-features exited with {code}")
+    ranking = pd.read_csv(out / "feature_ranking.csv")
+    return {"n_features": int(len(ranking)), "top5": ranking.iloc[:5, 0].tolist()}
+
+
 def stage_models(out: Path) -> dict:
     """Train the CNN on a small dataset of the demo sweep's classes (10 records per class) and evaluate it
     on a stratified 30 % held out (accuracy, macro-F1, confusion matrices, severity MAE)."""
@@ -116,7 +130,7 @@ def stage_compare(out: Path) -> dict:
 
 #: (name, function(out_dir) -> JSON-able summary), in pipeline order
 STAGES = [("stiffness", stage_stiffness), ("simulate", stage_simulate), ("dataset", stage_dataset),
-          ("models", stage_models), ("compare", stage_compare)]
+          ("features", stage_features), ("models", stage_models), ("compare", stage_compare)]
 
 
 def register(sub) -> None:
