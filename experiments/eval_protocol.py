@@ -1,7 +1,7 @@
 """Evaluation protocol of the classifiers (issue 6) -> experiments/RESULTS.md.
 
-Run: ``python experiments/eval_protocol.py`` (about 30-60 min on 2 shared cores, most of it
-dataset generation and feature tables, which are cached in ``experiments/out/models/``).
+Run: ``python experiments/eval_protocol.py`` (about 45 min on 2 shared cores; the datasets and feature
+tables are generated once and cached in ``experiments/out/models/``; ``--only PROTOCOL ...`` reruns some).
 
 Protocols
 ---------
@@ -38,11 +38,12 @@ sys.path.insert(0, str(ROOT))
 from models.augment import AugmentConfig  # noqa: E402
 from models.baselines import KINDS, feature_config_for, feature_table, fit_baseline  # noqa: E402
 from models.data import SignalSet, concat  # noqa: E402
-from models.evaluate import evaluate, report_markdown, write_report  # noqa: E402
+from models.evaluate import evaluate, write_report  # noqa: E402
 from models.plots import plot_confusions  # noqa: E402
 from models.representations import RepresentationSpec  # noqa: E402
 from models.sources import load_dataset  # noqa: E402
 from models.train import TrainConfig, stratified_split, train_cnn  # noqa: E402
+from models_results_md import insert_tables, results_tables  # noqa: E402  (experiments/models_results_md.py)
 
 SWEEPS = ROOT / "experiments" / "models_sweeps"
 OUT = ROOT / "experiments" / "out" / "models"
@@ -195,6 +196,43 @@ def augmentation_ablation(data: SignalSet, rep: str) -> dict:
             "strong": cnn_run(train, {"test": test}, REPRESENTATIONS[rep], where / "strong", augment=strong)}
 
 
+NUISANCE_COLUMNS = ("speed_rpm", "torque_nm", "snr_db", "transmission_path_housing_frequency_hz",
+                    "transmission_path_housing_damping_ratio", "n_pitted_teeth", "pit_depth_m", "pit_aspect_w_to_s",
+                    "pitch_error_grade", "profile_error_grade", "drive_train_mesh_damping_ratio")
+
+
+def ceiling(data: SignalSet, x: np.ndarray) -> dict:
+    """How identifiable is the severity class? Gradient boosting on the feature table plus the *true*
+    nuisance parameters of every record (speed, load, path, noise, teeth, pit shape/depth/aspect,
+    manufacturing errors), which no real classifier gets; same split."""
+    from sklearn.ensemble import GradientBoostingClassifier
+
+    log("severity ceiling check (features + true nuisance parameters)")
+    lab = data.labels
+    nuis = np.column_stack([lab[c].fillna(0).to_numpy(dtype=float) for c in NUISANCE_COLUMNS]
+                           + [(lab["shape"] == "cluster").to_numpy(dtype=float)])
+    tr, te = stratified_split(strata(data), 0.3, SEED)
+    y = lab["severity_class"].astype(str).to_numpy()
+    out = {}
+    for name, f in (("features", np.nan_to_num(x)), ("features_and_true_nuisances", np.column_stack([np.nan_to_num(x), nuis]))):
+        g = GradientBoostingClassifier(n_estimators=150, max_depth=3, random_state=SEED).fit(f[tr], y[tr])
+        out[name] = float(np.mean(g.predict(f[te]) == y[te]))
+    log(f"  {out}")
+    return out
+
+
+def learning_curve(data: SignalSet, rep: str, fractions=(0.25, 0.5)) -> dict:
+    """The chosen CNN trained on a fraction of the in-domain training part, same test split."""
+    log(f"learning curve ({rep})")
+    tr, te = stratified_split(strata(data), 0.3, SEED)
+    train, test = data.subset(tr), data.subset(te)
+    out = {}
+    for f in fractions:
+        keep, _ = stratified_split(strata(train), 1.0 - f, SEED + 1) if f < 1 else (np.arange(len(train)), None)
+        out[str(f)] = cnn_run(train.subset(keep), {"test": test}, REPRESENTATIONS[rep], OUT / "learning_curve" / str(f))
+    return out
+
+
 def cross_condition(data: SignalSet, x: np.ndarray, names, cfg, reps: list[str]) -> dict:
     res = {}
     lab = data.labels
@@ -276,135 +314,13 @@ def real_data(default: SignalSet) -> dict:
     return res
 
 
-# ------------------------------------------------------------------ tables
-
-
-def _pct(v) -> str:
-    return "-" if v is None else f"{100 * v:.1f}"
-
-
-def _row(label: str, s: dict) -> str:
-    mae = s.get("severity_mae")
-    mae = "-" if mae is None else f"{mae:.3f}"
-    return (f"| {label} | {_pct(s.get('accuracy'))} | {_pct(s.get('macro_f1'))} | {_pct(s.get('teeth_accuracy'))} | "
-            f"{_pct(s.get('teeth_macro_f1'))} | {mae} |")
-
-
-HEAD = ("| model | severity acc. % | severity macro-F1 % | teeth acc. % | teeth macro-F1 % | severity MAE |\n"
-        "|---|---|---|---|---|---|")
-
-
-def _protocol_rows(r: dict, choice: str, label: str) -> list[str]:
-    b = r["baselines"]
-    best = b.get("best") or max(KINDS, key=lambda k: b[k]["test"]["accuracy"])
-    return [_row(f"{label}: CNN ({choice})", r["cnn"][choice]["test"]),
-            _row(f"{label}: best baseline ({best})", b[best]["test"])]
-
-
-def results_tables(res: dict) -> str:
-    """Markdown tables of ``results.json`` (inserted into RESULTS.md)."""
-    out = []
-    ind = res.get("in_domain")
-    choice = ind["cnn_choice"] if ind else "tsa"
-    if ind:
-        out += ["### Headline: every protocol, the CNN and the best baseline", "", HEAD]
-        out += _protocol_rows(ind, choice, "in-domain (default)")
-        if "randomised" in res:
-            rr = res["randomised"]
-            ch = choice if choice in rr["cnn"] else rr["cnn_choice"]
-            out += _protocol_rows(rr, ch, "in-domain (randomised sweep)")
-        for split, r in res.get("cross_condition", {}).items():
-            out += _protocol_rows(r, choice, f"cross-condition ({split}: {r['rule']})")
-        if "cross_physics" in res:
-            out += _protocol_rows(res["cross_physics"], choice, "cross-physics (no path -> path)")
-        if "real" in res and "cnn" in res["real"]:
-            rl = res["real"]
-            for ch in ("a1", "a2", "a3", "a4"):
-                out.append(f"| real data, channel {ch}: CNN (mesh_order, binary) | {_pct(rl['cnn'][ch]['accuracy'])} | "
-                           f"{_pct(rl['cnn'][ch]['macro_f1'])} | n/a | n/a | n/a |")
-                out.append(f"| real data, channel {ch}: logreg on mesh-order spectrum | "
-                           f"{_pct(rl['logreg_mesh_order'][ch]['accuracy'])} | - | n/a | n/a | n/a |")
-        out += ["", f"CNN representation chosen on the validation split: **{choice}**; best baseline chosen on an "
-                "internal 80/20 split of the training data. Accuracy and macro-F1 in %, severity MAE in pitted "
-                "fraction of the flank.", ""]
-        out += ["### In-domain (default dataset): every input representation and baseline", "",
-                f"{ind['n_train']} training records (of which 20 % validation for early stopping), "
-                f"{ind['n_test']} test records.", "",
-                "| model | val. acc. % | val. teeth acc. % | test severity acc. % | test macro-F1 % | test teeth acc. % | "
-                "test severity MAE | epochs | train s |", "|---|---|---|---|---|---|---|---|---|"]
-        for rep, r in ind["cnn"].items():
-            t = r["test"]
-            out.append(f"| CNN {rep} | {_pct(r['val_accuracy'])} | {_pct(r['val_teeth_accuracy'])} | {_pct(t['accuracy'])} | "
-                       f"{_pct(t['macro_f1'])} | {_pct(t.get('teeth_accuracy'))} | {t.get('severity_mae', 0):.3f} | "
-                       f"{r['epochs']} | {r['train_seconds']} |")
-        for kind in KINDS:
-            t = ind["baselines"][kind]["test"]
-            out.append(f"| {kind} (feature table) | - | - | {_pct(t['accuracy'])} | {_pct(t['macro_f1'])} | "
-                       f"{_pct(t.get('teeth_accuracy'))} | {t.get('severity_mae', 0):.3f} | - | - |")
-        out.append("")
-    if "augmentation" in res:
-        a = res["augmentation"]
-        out += [f"### Augmentation ablation (CNN {choice}, default dataset, same split)", "", HEAD]
-        if ind:
-            out.append(_row("default (light: 25 % of records + noise at 20-40 dB, 0.2 % speed error)",
-                            ind["cnn"][choice]["test"]))
-        out.append(_row("none (no crop, gain, noise, speed error or polarity)", a["none"]["test"]))
-        out.append(_row("strong (50 % + noise at 5-30 dB, 1 % speed error)", a["strong"]["test"]))
-        out.append("")
-    sections = [("cross_condition", "Cross-condition")]
-    for key, title in sections:
-        for split, r in res.get(key, {}).items():
-            out += [f"### {title}: {split} ({r['rule']}; {r['n_train']} train, {r['n_test']} test)", "", HEAD]
-            out += [_row(f"CNN {rep}", v["test"]) for rep, v in r["cnn"].items()]
-            out += [_row(kind, r["baselines"][kind]["test"]) for kind in KINDS] + [""]
-    if "cross_physics" in res:
-        r = res["cross_physics"]
-        out += [f"### Cross-physics ({r['rule']}; {r['n_train']} train, {r['n_test']} test)", "", HEAD]
-        out += [_row(f"CNN {rep}", v["test"]) for rep, v in r["cnn"].items()]
-        out += [_row(kind, r["baselines"][kind]["test"]) for kind in KINDS] + [""]
-    if "randomised" in res:
-        r = res["randomised"]
-        out += [f"### In-domain on the randomised sweep ({r['n_train']} train, {r['n_test']} test)", "", HEAD]
-        out += [_row(f"CNN {rep}", v["test"]) for rep, v in r["cnn"].items()]
-        out += [_row(kind, r["baselines"][kind]["test"]) for kind in KINDS] + [""]
-    if "real" in res and "cnn" in res["real"]:
-        rl = res["real"]
-        out += ["### Real data (SpectraQuest, healthy vs broken tooth; trained on synthetic healthy vs pitted)", "",
-                f"{rl['n_records_per_channel']} records of 8192 samples per channel from {len(rl['files'])} files. "
-                "Estimated mesh frequency per file (cycles/sample): "
-                + ", ".join(f"{k} {v}" for k, v in rl["mesh_cps"].items()) + ".", "",
-                "| channel | CNN acc. % | CNN macro-F1 % | CNN: fraction called damaged | logreg (mesh-order) acc. % | "
-                "logreg: fraction called damaged | real-to-real (leave one load out) acc. % |",
-                "|---|---|---|---|---|---|---|"]
-        for ch in ("a1", "a2", "a3", "a4"):
-            c, lg = rl["cnn"][ch], rl["logreg_mesh_order"][ch]
-            out.append(f"| {ch} | {_pct(c['accuracy'])} | {_pct(c['macro_f1'])} | "
-                       f"{_pct(rl['cnn_predicted_damaged_fraction'][ch])} | {_pct(lg['accuracy'])} | "
-                       f"{_pct(lg['predicted_damaged_fraction'])} | {_pct(rl['real_to_real'][ch])} |")
-        out.append("")
-    return "\n".join(out) + "\n"
-
-
-BEGIN, END = "<!-- tables:begin (written by experiments/eval_protocol.py) -->", "<!-- tables:end -->"
-
-
-def insert_tables(path: Path, tables: str) -> None:
-    """Replace the text between the table markers of ``path`` (append the markers if missing)."""
-    text = path.read_text() if path.is_file() else "# Classifier results\n\n"
-    if BEGIN in text and END in text:
-        head, rest = text.split(BEGIN, 1)
-        tail = rest.split(END, 1)[1]
-    else:
-        head, tail = text + "\n", "\n"
-    path.write_text(head + BEGIN + "\n\n" + tables + "\n" + END + tail)
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data-dir", type=Path, default=OUT / "data", help="where the generated datasets live")
     ap.add_argument("--jobs", type=int, default=1, help="processes for the feature tables")
     ap.add_argument("--only", nargs="*", default=None,
-                    help="protocols to run (in_domain randomised augmentation cross_condition cross_physics real)")
+                    help="protocols to run (in_domain randomised augmentation learning_curve ceiling cross_condition "
+                         "cross_physics real); the others keep their stored results")
     args = ap.parse_args(argv)
     import torch
 
@@ -412,7 +328,8 @@ def main(argv=None) -> int:
     OUT.mkdir(parents=True, exist_ok=True)
     results_path = OUT / "results.json"
     results = json.loads(results_path.read_text()) if results_path.is_file() else {}
-    todo = args.only or ["in_domain", "randomised", "augmentation", "cross_condition", "cross_physics", "real"]
+    todo = args.only or ["in_domain", "randomised", "augmentation", "learning_curve", "ceiling", "cross_condition",
+                         "cross_physics", "real"]
     t0 = time.perf_counter()
     default = dataset("default", args.data_dir)
     x_d, names, cfg = features("default", default, args.jobs)
@@ -426,6 +343,10 @@ def main(argv=None) -> int:
         results["randomised"] = in_domain("randomised", rnd, x_r, names_r, cfg_r, reps)
     if "augmentation" in todo:
         results["augmentation"] = augmentation_ablation(default, choice)
+    if "learning_curve" in todo:
+        results["learning_curve"] = learning_curve(default, choice)
+    if "ceiling" in todo:
+        results["ceiling"] = ceiling(default, x_d)
     if "cross_condition" in todo:
         results["cross_condition"] = cross_condition(default, x_d, names, cfg, reps)
     if "cross_physics" in todo:

@@ -18,9 +18,9 @@ network; the gain still matters for the noise level and is kept so that
 augmented records are plausible records.
 
 The defaults are deliberately light (noise in a quarter of the records at
-20-40 dB, speed error 0.2 %): on the default dataset, which already holds noise
-at 20-40 dB, heavier noise (5-30 dB in half the records) and a 1 % speed error
-cost about 5 points of in-domain accuracy (measured, see experiments/RESULTS.md).
+20-40 dB, speed error 0.2 %). Measured on the default dataset (CNN, tsa input,
+experiments/RESULTS.md): light 82 % severity / 93 % teeth accuracy; none 77 % /
+84 %; heavier (5-30 dB noise in half the records, 1 % speed error) 80 % / 81 %.
 """
 from __future__ import annotations
 
