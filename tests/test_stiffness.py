@@ -194,3 +194,16 @@ def test_weighted_of_one_is_pair_stiffness():
     pair = helical_pair_example()
     ms = mesh_stiffness(pair, pits=_rect_pits(pair, 3, (10, 30), (5, 40)), positions_per_cycle=16, n_slices=40)
     np.testing.assert_allclose(ms.weighted(lambda g, p, w: np.ones_like(g)), ms.k_slots_n_per_m, rtol=1e-12)
+
+
+def test_slice_level_results_agree_with_pair_totals():
+    """Per-slice API: slice stiffness summed over slices = per-pair stiffness (rel 1e-12), and every slice in
+    contact lies on the path of contact [A, E] with NaN exactly where the slice carries nothing healthy."""
+    pair = helical_pair_example()
+    ms = mesh_stiffness(pair, pits=_rect_pits(pair, 2, (10, 30), (5, 40)), positions_per_cycle=16, n_slices=40)
+    for i in range(0, ms.k_n_per_m.size, 7):
+        np.testing.assert_allclose(ms.slice_stiffness(i).sum(axis=1), ms.k_slots_n_per_m[i], rtol=1e-12)
+        g = ms.contact_positions(i)
+        on = ~np.isnan(g)
+        assert np.all((g[on] >= pair.contact_start_m - 1e-12) & (g[on] <= pair.contact_end_m + 1e-12))
+        assert np.all(ms.slice_stiffness(i)[~on] == 0)
