@@ -39,7 +39,7 @@ The spur paper: ../shared/seeds/000_3879ffd8da6fd0be.txt (pixel / weak-spring mo
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
@@ -180,6 +180,33 @@ class MeshStiffness:
                      np.broadcast_to((m % z2)[:, :, None, None], shape))
             out[c0:c0 + m.shape[0]] = np.sum(k * vals, axis=3).transpose(0, 2, 1)
         return out.reshape(n_cycles * ppc, S)
+
+    def map_cycle_blocks(self, fn) -> "MeshStiffness":
+        """A record with every mesh cycle's slice stiffness replaced by ``fn(block)``.
+
+        ``block`` is the ``(ppc, n_slots, n_slices)`` slice stiffness of one mesh
+        cycle (every pair in contact); ``fn`` returns an array of that shape. It
+        is applied to the healthy cycle and, separately, to every cycle in which a
+        pitted pair is in contact, because a change that depends on the load
+        sharing (e.g. a load-dependent contact stiffness) couples all pairs of a
+        cycle. Contact positions and engagements are unchanged.
+        """
+        P, ppc, S = self.period_cycles, self.positions_per_cycle, self.n_slots
+        k_cycle = np.asarray(fn(self._k_cycle.copy()), dtype=float)
+        if k_cycle.shape != self._k_cycle.shape:
+            raise ValueError(f"map_cycle_blocks: fn returned shape {k_cycle.shape}, expected {self._k_cycle.shape}")
+        k_slots = np.tile(k_cycle.sum(axis=2), (P, 1))
+        overrides = {}
+        for c in sorted({(m + s) % P for (m, s) in self._overrides}):
+            block = self._k_cycle.copy()
+            for s in range(S):
+                block[:, s] = self._overrides.get(((c - s) % P, s), block[:, s])
+            new = np.asarray(fn(block), dtype=float)
+            for s in range(S):
+                overrides[((c - s) % P, s)] = new[:, s]
+            k_slots[c * ppc:(c + 1) * ppc] = new.sum(axis=2)
+        return replace(self, k_n_per_m=k_slots.sum(axis=1), k_slots_n_per_m=k_slots, _k_cycle=k_cycle,
+                       _overrides=overrides)
 
     @cached_property
     def repeat_cycles(self) -> int:

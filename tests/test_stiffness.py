@@ -207,3 +207,31 @@ def test_slice_level_results_agree_with_pair_totals():
         on = ~np.isnan(g)
         assert np.all((g[on] >= pair.contact_start_m - 1e-12) & (g[on] <= pair.contact_end_m + 1e-12))
         assert np.all(ms.slice_stiffness(i)[~on] == 0)
+
+
+def test_map_cycle_blocks_identity_scale_and_coupling():
+    """map_cycle_blocks: the identity reproduces the record exactly; halving every slice halves k everywhere
+    (pitted cycles included); a load-sharing map (each slot scaled by its share of the cycle's stiffness)
+    changes a pitted cycle differently from the healthy one, so pitted cycles are mapped on their own."""
+    pair = spur_pair_example()
+    ms = mesh_stiffness(pair, pits=_rect_pits(pair, 3, (20, 40), (10, 50)), positions_per_cycle=20, n_slices=40)
+    same = ms.map_cycle_blocks(lambda b: b)
+    np.testing.assert_array_equal(same.k_n_per_m, ms.k_n_per_m)
+    np.testing.assert_array_equal(same.k_slots_n_per_m, ms.k_slots_n_per_m)
+    half = ms.map_cycle_blocks(lambda b: 0.5 * b)
+    np.testing.assert_allclose(half.k_n_per_m, 0.5 * ms.k_n_per_m, rtol=1e-12)
+    for i in range(0, ms.k_n_per_m.size, 11):
+        np.testing.assert_allclose(half.slice_stiffness(i), 0.5 * ms.slice_stiffness(i), rtol=1e-12)
+
+    def share(b):
+        pair_k = b.sum(axis=2, keepdims=True)
+        return b * (1 + pair_k / np.maximum(pair_k.sum(axis=1, keepdims=True), 1e-30))
+
+    mapped = ms.map_cycle_blocks(share)
+    ppc = ms.positions_per_cycle
+    for i in range(0, ms.k_n_per_m.size, 5):
+        expected = share(ms.slice_stiffness(i)[None])[0].sum(axis=1)
+        np.testing.assert_allclose(mapped.k_slots_n_per_m[i], expected, rtol=1e-12)
+    assert not np.allclose(mapped.k_n_per_m[3 * ppc:4 * ppc], mapped.k_n_per_m[:ppc])
+    with pytest.raises(ValueError, match="shape"):
+        ms.map_cycle_blocks(lambda b: b[:, :1])

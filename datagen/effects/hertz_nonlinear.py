@@ -46,7 +46,7 @@ Yang, D. C. H., Lin, J. Y. (1987). J. Mech. Trans. Autom. Des. 109, 189-196 (lin
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -96,20 +96,7 @@ def hertz_nonlinear_stiffness(stiffness, torque_nm: float):
     c_h = hertz_compliance(E, pair.material.poisson)
     dw = pair.contact_face_width_m / ms.n_slices
     force = torque_nm / pair.base_radius_m("pinion")
-    P, ppc, S = ms.period_cycles, ms.positions_per_cycle, ms.n_slots
-    k_cycle = _corrected_block(ms._k_cycle, force, dw, E, c_h)
-    k_slots = np.tile(k_cycle.sum(axis=2), (P, 1))
-    overrides = {}
-    for c in sorted({(m + s) % P for (m, s) in ms._overrides}):
-        block = ms._k_cycle.copy()
-        for s in range(S):
-            block[:, s] = ms._overrides.get(((c - s) % P, s), block[:, s])
-        new = _corrected_block(block, force, dw, E, c_h)
-        for s in range(S):
-            overrides[((c - s) % P, s)] = new[:, s]
-        k_slots[c * ppc:(c + 1) * ppc] = new.sum(axis=2)
-    return replace(ms, k_n_per_m=k_slots.sum(axis=1), k_slots_n_per_m=k_slots, _k_cycle=k_cycle,
-                   _overrides=overrides)
+    return ms.map_cycle_blocks(lambda block: _corrected_block(block, force, dw, E, c_h))
 
 
 @register
