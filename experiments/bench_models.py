@@ -3,9 +3,9 @@
 Run: ``python experiments/bench_models.py`` (the default dataset, ``experiments/models_sweeps/default*.toml``,
 is generated into ``experiments/out/models/data`` first if it is not there: ~5 min).
 
-- training: the CNN with the protocol's configuration (``tsa`` representation, the default
-  :class:`models.train.TrainConfig`: at most 150 epochs, early stopping) on the whole default dataset;
-  target < 5 min on 2 cores;
+- training: the CNN with the protocol's configuration (a CNN variant of ``eval_protocol.VARIANTS``,
+  default ``tsa``: representation and side inputs; the default :class:`models.train.TrainConfig`: at
+  most 150 epochs, early stopping) on the whole default dataset; target < 5 min on 2 cores;
 - inference: ``CNNClassifier.predict`` (representation + network, 1 and 3 test-time crops) on 1024
   records; target >= 500 signals/s;
 - reference measured in the same run: computing the representation alone (numpy FFTs), the floor
@@ -26,32 +26,33 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from models.representations import RepresentationSpec, represent  # noqa: E402
+from models.representations import represent  # noqa: E402
 from models.train import TrainConfig, train_cnn  # noqa: E402
 
 TRAIN_TARGET_S = 300.0
 THROUGHPUT_TARGET = 500.0
 
 
-def default_dataset(data_dir: Path):
-    sys.path.insert(0, str(ROOT / "experiments"))
-    from eval_protocol import dataset
+sys.path.insert(0, str(ROOT / "experiments"))
+from eval_protocol import VARIANTS, dataset  # noqa: E402
 
+
+def default_dataset(data_dir: Path):
     return dataset("default", data_dir)
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data-dir", type=Path, default=ROOT / "experiments" / "out" / "models" / "data")
-    ap.add_argument("--representation", default="tsa", choices=("tsa", "order"))
+    ap.add_argument("--variant", default="tsa", choices=tuple(VARIANTS),
+                    help="CNN variant of experiments/eval_protocol.py (representation + side inputs)")
     ap.add_argument("--threads", type=int, default=1, choices=(1, 2))
     args = ap.parse_args(argv)
     import torch
 
     torch.set_num_threads(args.threads)
     data = default_dataset(args.data_dir)
-    rep = (RepresentationSpec(kind="tsa", n_revs=8, samples_per_rev=1024) if args.representation == "tsa"
-           else RepresentationSpec(kind="order", n_revs=8, max_order=100.0))
+    rep, side = VARIANTS[args.variant]
     print(f"default dataset: {len(data)} records x {data.n_samples} samples at {data.fs_hz:g} Hz")
 
     # reference: the representation alone, once over the training records
@@ -59,7 +60,7 @@ def main(argv=None) -> int:
     represent(data.signals, rep, fs_hz=data.fs_hz, shaft_hz=data.shaft_hz(), z_pinion=data.pair.z_pinion, starts=0.5)
     t_rep = time.perf_counter() - t0
 
-    cfg = TrainConfig(representation=rep, seed=0, threads=args.threads)
+    cfg = TrainConfig(representation=rep, seed=0, threads=args.threads, operating_inputs=side)
     t0 = time.perf_counter()
     model = train_cnn(data, cfg)
     t_train = time.perf_counter() - t0
@@ -85,7 +86,8 @@ def main(argv=None) -> int:
           f"target >= {THROUGHPUT_TARGET:.0f}")
     print(f"reference: representation alone {ref_rate:.0f} signals/s; predict (1 crop) runs at "
           f"{rates[1] / ref_rate:.2f} of it")
-    result = {"benchmark": "models", "representation": rep.kind, "threads": args.threads, "n_records": len(data),
+    result = {"benchmark": "models", "variant": args.variant, "representation": rep.kind,
+              "side_inputs": list(side), "threads": args.threads, "n_records": len(data),
               "train_seconds": round(t_train, 1), "epochs": tr["epochs_run"], "n_parameters": tr["n_parameters"],
               "train_target_seconds": TRAIN_TARGET_S, "train_ok": t_train < TRAIN_TARGET_S,
               "signals_per_second_1crop": round(rates[1], 1), "signals_per_second_3crops": round(rates[3], 1),

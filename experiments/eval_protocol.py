@@ -6,9 +6,11 @@ tables are generated once and cached in ``experiments/out/models/``; ``--only PR
 Protocols
 ---------
 1. in-domain: the default dataset (``experiments/models_sweeps/default*.toml``), stratified 70/30
-   split; the CNN on every input representation (raw, envelope, tsa, order) and the three
-   feature-table baselines; the CNN representation is chosen on the validation split inside
-   the training data, the best baseline on an internal 80/20 split of the training data.
+   split; the CNN on every input representation (raw, envelope, tsa, order; the TSA also with the
+   known speed and load as side inputs, ``tsa_op``, and with the record level in m/s^2 too,
+   ``tsa_level``) and the three feature-table baselines; the CNN variant is chosen on the validation
+   split inside the training data among those not bound to the sensor calibration (not
+   ``tsa_level``), the best baseline on an internal 80/20 split of the training data.
    Repeated on the harder, domain-randomised sweep (``randomised*.toml``).
 2. cross-condition: the default dataset split by speed (train < 1200 rpm, test >= 1200 rpm) and
    by load (train < 50 N m, test >= 50 N m).
@@ -57,6 +59,20 @@ REPRESENTATIONS = {
     "tsa": RepresentationSpec(kind="tsa", n_revs=8, samples_per_rev=1024),
     "order": RepresentationSpec(kind="order", n_revs=8, max_order=100.0),
 }
+#: CNN variants: name -> (representation, side inputs, see models/operating.py). ``tsa_op``: the TSA with
+#: the known speed and load; ``tsa_level``: also the record's RMS in m/s^2, i.e. a model tied to the
+#: sensor calibration and transmission path it was trained with
+OPERATING = ("speed_rpm", "torque_nm")
+VARIANTS = {**{k: (v, ()) for k, v in REPRESENTATIONS.items()},
+            "tsa_op": (REPRESENTATIONS["tsa"], OPERATING),
+            "tsa_level": (REPRESENTATIONS["tsa"], OPERATING + ("signal_rms",))}
+#: variants that may be "the CNN": not the calibration-bound one (it cannot transfer to another sensor
+#: path; it is reported beside the chosen CNN)
+CHOOSABLE = tuple(v for v in VARIANTS if "signal_rms" not in VARIANTS[v][1])
+CALIBRATED = "tsa_level"
+#: CNN runs of an earlier results.json that ``--reuse`` may take instead of training again:
+#: "<run directory under OUT>#<variant>" -> stored result (see stored_runs)
+REUSE: dict = {}
 MESH_ORDER = RepresentationSpec(kind="mesh_order", n_mesh_periods=256, max_order=4.0)
 
 
@@ -124,23 +140,53 @@ def save_run(path: Path, metrics: dict, pred, data: SignalSet, title: str) -> No
     plot_confusions(metrics, path / "confusion.png")
 
 
-def cnn_run(train: SignalSet, tests: dict[str, SignalSet], rep: RepresentationSpec, where: Path, *,
+def cnn_run(train: SignalSet, tests: dict[str, SignalSet], variant: str, where: Path, *,
             task: str = "multi", augment: AugmentConfig | None = None, allow_mismatch: bool = False) -> dict:
-    cfg = TrainConfig(representation=rep, task=task, augment=augment or AugmentConfig(), seed=SEED)
+    rep, operating = VARIANTS[variant] if variant in VARIANTS else (MESH_ORDER, ())
+    cfg = TrainConfig(representation=rep, task=task, augment=augment or AugmentConfig(), seed=SEED,
+                      operating_inputs=operating)
+    key = f"{where.relative_to(OUT)}#{variant}"
+    old = REUSE.get(key)
+    # a run stored before the config was recorded comes from the code without side inputs (models/ unchanged
+    # otherwise): it stands for the same configuration only if this one has no side inputs
+    same = old is not None and (old["config"] == cfg.to_dict() if "config" in old else not operating)
+    if same and old.get("n_train") == len(train) and all(n in old for n in tests):
+        log(f"  CNN {variant}: reusing the stored run {key} (same configuration and training records)")
+        return {**old, "config": cfg.to_dict()}
     t0 = time.perf_counter()
     model = train_cnn(train, cfg)
     secs = time.perf_counter() - t0
     tr = model.spec.training
-    out = {"train_seconds": round(secs, 1), "epochs": tr["epochs_run"], "val_accuracy": tr["val_accuracy"],
-           "val_teeth_accuracy": tr["val_teeth_accuracy"], "n_train": tr["n_train"] + tr["n_val"]}
+    out = {"variant": variant, "train_seconds": round(secs, 1), "epochs": tr["epochs_run"],
+           "val_accuracy": tr["val_accuracy"],
+           "val_teeth_accuracy": tr["val_teeth_accuracy"], "n_train": tr["n_train"] + tr["n_val"],
+           "n_parameters": tr["n_parameters"], "config": cfg.to_dict()}
     for name, test in tests.items():
         pred = model.predict(test, allow_mismatch=allow_mismatch)
         m = evaluate(test, pred)
-        save_run(where / name, m, pred, test, f"CNN ({rep.kind}) on {name}")
+        save_run(where / name, m, pred, test, f"CNN ({variant}) on {name}")
         out[name] = summary(m)
-    log(f"  CNN {rep.kind}: " + ", ".join(f"{k} acc {v['accuracy']:.3f}" for k, v in out.items() if isinstance(v, dict))
+    log(f"  CNN {variant}: " + ", ".join(f"{k} acc {out[k]['accuracy']:.3f}" for k in tests)
         + f" ({secs:.0f} s)")
     return out
+
+
+def stored_runs(results: dict) -> dict:
+    """Every CNN run of a results.json, keyed as :data:`REUSE`."""
+    runs = {}
+    choice = results.get("in_domain", {}).get("cnn_choice", "tsa")
+    for proto, sub in (("in_domain", "in_domain_default"), ("randomised", "in_domain_randomised"),
+                       ("cross_physics", "cross_physics")):
+        for v, r in results.get(proto, {}).get("cnn", {}).items():
+            runs[f"{sub}/cnn_{v}#{v}"] = r
+    for split, rr in results.get("cross_condition", {}).items():
+        for v, r in rr.get("cnn", {}).items():
+            runs[f"cross_{split}/cnn_{v}#{v}"] = r
+    for k, r in results.get("augmentation", {}).items():
+        runs[f"augmentation/{k}#{r.get('variant', choice)}"] = r
+    for k, r in results.get("learning_curve", {}).items():
+        runs[f"learning_curve/{k}#{r.get('variant', choice)}"] = r
+    return runs
 
 
 def baseline_runs(train: SignalSet, x_train: np.ndarray, tests: dict[str, tuple[SignalSet, np.ndarray]], names, cfg,
@@ -180,8 +226,9 @@ def in_domain(name: str, data: SignalSet, x: np.ndarray, names, cfg, reps: list[
     where = OUT / f"in_domain_{name}"
     res = {"n_train": int(tr.size), "n_test": int(te.size), "cnn": {}}
     for r in reps:
-        res["cnn"][r] = cnn_run(train, {"test": test}, REPRESENTATIONS[r], where / f"cnn_{r}")
-    res["cnn_choice"] = max(res["cnn"], key=lambda r: res["cnn"][r]["val_accuracy"] + res["cnn"][r]["val_teeth_accuracy"])
+        res["cnn"][r] = cnn_run(train, {"test": test}, r, where / f"cnn_{r}")
+    eligible = [r for r in res["cnn"] if r in CHOOSABLE]
+    res["cnn_choice"] = max(eligible, key=lambda r: res["cnn"][r]["val_accuracy"] + res["cnn"][r]["val_teeth_accuracy"])
     res["baselines"] = baseline_runs(train, x[tr], {"test": (test, x[te])}, names, cfg, where)
     return res
 
@@ -192,8 +239,8 @@ def augmentation_ablation(data: SignalSet, rep: str) -> dict:
     train, test = data.subset(tr), data.subset(te)
     where = OUT / "augmentation"
     strong = AugmentConfig(noise_probability=0.5, snr_db_range=(5.0, 30.0), speed_error=0.01)
-    return {"none": cnn_run(train, {"test": test}, REPRESENTATIONS[rep], where / "none", augment=AugmentConfig.none()),
-            "strong": cnn_run(train, {"test": test}, REPRESENTATIONS[rep], where / "strong", augment=strong)}
+    return {"none": cnn_run(train, {"test": test}, rep, where / "none", augment=AugmentConfig.none()),
+            "strong": cnn_run(train, {"test": test}, rep, where / "strong", augment=strong)}
 
 
 NUISANCE_COLUMNS = ("speed_rpm", "torque_nm", "snr_db", "transmission_path_housing_frequency_hz",
@@ -229,7 +276,7 @@ def learning_curve(data: SignalSet, rep: str, fractions=(0.25, 0.5)) -> dict:
     out = {}
     for f in fractions:
         keep, _ = stratified_split(strata(train), 1.0 - f, SEED + 1) if f < 1 else (np.arange(len(train)), None)
-        out[str(f)] = cnn_run(train.subset(keep), {"test": test}, REPRESENTATIONS[rep], OUT / "learning_curve" / str(f))
+        out[str(f)] = cnn_run(train.subset(keep), {"test": test}, rep, OUT / "learning_curve" / str(f))
     return out
 
 
@@ -245,7 +292,7 @@ def cross_condition(data: SignalSet, x: np.ndarray, names, cfg, reps: list[str])
         r = {"rule": f"train {col} < {edge:g} {unit}, test >= {edge:g} {unit}", "n_train": int(lo.size),
              "n_test": int(hi.size), "cnn": {}}
         for rep in reps:
-            r["cnn"][rep] = cnn_run(train, {"test": test}, REPRESENTATIONS[rep], where / f"cnn_{rep}")
+            r["cnn"][rep] = cnn_run(train, {"test": test}, rep, where / f"cnn_{rep}")
         r["baselines"] = baseline_runs(train, x[lo], {"test": (test, x[hi])}, names, cfg, where)
         res[split] = r
     return res
@@ -260,7 +307,7 @@ def cross_physics(nopath: SignalSet, x_np: np.ndarray, default: SignalSet, x_d: 
     r = {"rule": "train on nopath (no housing transmission path), test on the default test split (with it)",
          "n_train": len(nopath), "n_test": int(te.size), "cnn": {}}
     for rep in reps:
-        r["cnn"][rep] = cnn_run(nopath, {"test": test}, REPRESENTATIONS[rep], where / f"cnn_{rep}")
+        r["cnn"][rep] = cnn_run(nopath, {"test": test}, rep, where / f"cnn_{rep}")
     r["baselines"] = baseline_runs(nopath, x_np, {"test": (test, x_d[te])}, names, cfg, where)
     return r
 
@@ -279,7 +326,7 @@ def real_data(default: SignalSet) -> dict:
     tests = {ch: load_unknown_rate_csv(files, channel=ch, record_samples=8192) for ch in ("a1", "a2", "a3", "a4")}
     res = {"files": [f.name for f in files], "n_records_per_channel": len(tests["a1"]),
            "mesh_cps": tests["a1"].labels.groupby("file")["mesh_cps"].first().round(5).to_dict()}
-    res["cnn"] = cnn_run(default, tests, MESH_ORDER, where / "cnn_mesh_order", task="binary", allow_mismatch=True)
+    res["cnn"] = cnn_run(default, tests, "mesh_order", where / "cnn_mesh_order", task="binary", allow_mismatch=True)
 
     # baseline: logistic regression on the same mesh-order representation (the feature table needs fs)
     def rep_of(d: SignalSet) -> np.ndarray:
@@ -321,6 +368,10 @@ def main(argv=None) -> int:
     ap.add_argument("--only", nargs="*", default=None,
                     help="protocols to run (in_domain randomised augmentation learning_curve ceiling cross_condition "
                          "cross_physics real); the others keep their stored results")
+    ap.add_argument("--reuse", action="store_true",
+                    help="take CNN runs of the stored results.json whose configuration and training records equal "
+                         "the current ones instead of training them again (same code, seeds and data give the same "
+                         "numbers on one thread)")
     args = ap.parse_args(argv)
     import torch
 
@@ -328,15 +379,19 @@ def main(argv=None) -> int:
     OUT.mkdir(parents=True, exist_ok=True)
     results_path = OUT / "results.json"
     results = json.loads(results_path.read_text()) if results_path.is_file() else {}
+    if args.reuse:
+        REUSE.update(stored_runs(results))
     todo = args.only or ["in_domain", "randomised", "augmentation", "learning_curve", "ceiling", "cross_condition",
                          "cross_physics", "real"]
     t0 = time.perf_counter()
     default = dataset("default", args.data_dir)
     x_d, names, cfg = features("default", default, args.jobs)
     if "in_domain" in todo:
-        results["in_domain"] = in_domain("default", default, x_d, names, cfg, list(REPRESENTATIONS))
+        results["in_domain"] = in_domain("default", default, x_d, names, cfg, list(VARIANTS))
     choice = results.get("in_domain", {}).get("cnn_choice", "tsa")
-    reps = sorted({choice, "order"})
+    # the chosen CNN, the TSA variants (plain, with the operating point, calibration-bound) and the order spectrum
+    reps = sorted({choice, "tsa", "tsa_op", CALIBRATED, "order"})
+    results_path.write_text(json.dumps(results, indent=1))  # partial results survive a later failure
     if "randomised" in todo:
         rnd = dataset("randomised", args.data_dir)
         x_r, names_r, cfg_r = features("randomised", rnd, args.jobs)
@@ -349,6 +404,7 @@ def main(argv=None) -> int:
         results["ceiling"] = ceiling(default, x_d)
     if "cross_condition" in todo:
         results["cross_condition"] = cross_condition(default, x_d, names, cfg, reps)
+    results_path.write_text(json.dumps(results, indent=1))
     if "cross_physics" in todo:
         nopath = dataset("nopath", args.data_dir)
         x_n, _, _ = features("nopath", nopath, args.jobs)

@@ -14,6 +14,7 @@ import torch
 from gearpit.errors import require
 from models.cnn import GearCNN
 from models.data import SignalSet
+from models.operating import n_operating, operating_features
 from models.representations import represent
 from models.spec import ModelSpec, Predictions, check_input
 
@@ -24,18 +25,21 @@ def build_network(spec: ModelSpec) -> GearCNN:
     arch = spec.train_config.get("architecture", {})
     return GearCNN(rep.n_channels, len(spec.severity_classes), len(spec.teeth_classes),
                    widths=tuple(arch.get("widths", (16, 32, 48, 64, 96))), hidden=int(arch.get("hidden", 64)),
-                   dropout=float(arch.get("dropout", 0.2)), circular=rep.kind == "tsa")
+                   dropout=float(arch.get("dropout", 0.2)), circular=rep.kind == "tsa",
+                   n_side=n_operating(spec.operating_inputs))
 
 
 def representation_batches(data: SignalSet, spec: ModelSpec, *, starts: float, batch_size: int = 256):
-    """Yield ``(slice, tensor)`` of the representation of ``data`` in batches."""
+    """Yield ``(slice, tensor, side)`` of the representation of ``data`` in batches; ``side`` is the
+    tensor of side inputs (:mod:`models.operating`) or None."""
     rep = spec.representation_spec()
     fr, mc = data.shaft_hz(), data.mesh_cps()
+    side = operating_features(data, spec.operating_inputs) if spec.operating_inputs else None
     for i0 in range(0, len(data), batch_size):
         sl = slice(i0, min(i0 + batch_size, len(data)))
         x = represent(data.signals[sl], rep, fs_hz=data.fs_hz, shaft_hz=None if fr is None else fr[sl],
                       mesh_cps=None if mc is None else mc[sl], z_pinion=data.pair.z_pinion or None, starts=starts)
-        yield sl, torch.from_numpy(x)
+        yield sl, torch.from_numpy(x), None if side is None else torch.from_numpy(side[sl])
 
 
 @dataclass
@@ -63,8 +67,8 @@ class CNNClassifier:
         self.network.eval()
         with torch.no_grad():
             for st in starts:
-                for sl, x in representation_batches(data, self.spec, starts=st, batch_size=batch_size):
-                    out = self.network(x)
+                for sl, x, side in representation_batches(data, self.spec, starts=st, batch_size=batch_size):
+                    out = self.network(x, side)
                     p_sev[sl] += torch.softmax(out["severity_class"], dim=1).numpy()
                     p_teeth[sl] += torch.softmax(out["teeth"], dim=1).numpy()
                     sev[sl] += out["severity"].numpy()

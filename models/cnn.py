@@ -11,6 +11,10 @@ feeds three heads:
   maximum, see :class:`models.io.ModelSpec`);
 - ``teeth``: logits over the pitted-teeth classes (``0, 1, 2, 3+``).
 
+Optional side inputs (``n_side``, e.g. the known speed and load, see
+:mod:`models.operating`) are concatenated to the pooled features before the
+shared layer.
+
 With the default widths the network has about 1.2e5 parameters.
 
 References
@@ -59,15 +63,18 @@ class GearCNN(nn.Module):
         Dropout before the heads.
     circular : bool
         Circular padding, for inputs that are one period of the shaft angle (TSA).
+    n_side : int
+        Number of side inputs (scalars per record) joined to the pooled features.
     """
 
     def __init__(self, in_channels: int, n_severity_classes: int, n_teeth_classes: int, *,
                  widths: tuple[int, ...] = DEFAULT_WIDTHS, hidden: int = 64, dropout: float = 0.2,
-                 circular: bool = False):
+                 circular: bool = False, n_side: int = 0):
         super().__init__()
         require(in_channels >= 1, "in_channels", in_channels, "an integer >= 1")
         require(n_severity_classes >= 2, "n_severity_classes", n_severity_classes, "an integer >= 2")
         require(n_teeth_classes >= 1, "n_teeth_classes", n_teeth_classes, "an integer >= 1")
+        require(n_side >= 0, "n_side", n_side, "an integer >= 0")
         require(len(widths) >= 1 and all(w >= 1 for w in widths), "widths", widths, "positive integers")
         blocks, c = [], in_channels
         for i, w in enumerate(widths):
@@ -76,15 +83,22 @@ class GearCNN(nn.Module):
         # batch-normalise each input channel: a channel of small values (the TSA difference signal) is scaled
         # up by the batch statistics while its level relative to other records is kept
         self.features = nn.Sequential(nn.BatchNorm1d(in_channels), *blocks)
-        self.shared = nn.Sequential(nn.Linear(3 * c, hidden), nn.ReLU(), nn.Dropout(dropout))
+        self.n_side = int(n_side)
+        self.shared = nn.Sequential(nn.Linear(3 * c + self.n_side, hidden), nn.ReLU(), nn.Dropout(dropout))
         self.severity_class = nn.Linear(hidden, n_severity_classes)
         self.severity = nn.Linear(hidden, 1)
         self.teeth = nn.Linear(hidden, n_teeth_classes)
 
-    def forward(self, x: torch.Tensor) -> dict[str, torch.Tensor]:
-        """``x``: (batch, channels, length) -> dict of head outputs (logits, scaled severity)."""
+    def forward(self, x: torch.Tensor, side: torch.Tensor | None = None) -> dict[str, torch.Tensor]:
+        """``x``: (batch, channels, length), ``side``: (batch, n_side) or None -> dict of head outputs
+        (logits, scaled severity)."""
         h = self.features(x)
-        h = torch.cat([h.mean(dim=2), h.amax(dim=2), torch.sqrt(h.square().mean(dim=2) + 1e-8)], dim=1)
+        parts = [h.mean(dim=2), h.amax(dim=2), torch.sqrt(h.square().mean(dim=2) + 1e-8)]
+        if self.n_side:
+            require(side is not None and tuple(side.shape) == (x.shape[0], self.n_side), "side",
+                    None if side is None else tuple(side.shape), f"a ({x.shape[0]}, {self.n_side}) tensor")
+            parts.append(side)
+        h = torch.cat(parts, dim=1)
         h = self.shared(h)
         return {"severity_class": self.severity_class(h), "severity": self.severity(h).squeeze(1),
                 "teeth": self.teeth(h)}

@@ -57,6 +57,9 @@ class ModelSpec:
         ``column -> [min, max]`` over the training records (:data:`RANGE_COLUMNS`).
     train_config : dict
         The training configuration, as given.
+    operating_inputs : dict
+        Side inputs of the CNN and their standardisation (:mod:`models.operating`);
+        empty: none.
     training : dict
         What happened in training (epochs, validation scores, time, sizes).
     """
@@ -73,6 +76,7 @@ class ModelSpec:
     channel: str | None = None
     ranges: dict = field(default_factory=dict)
     train_config: dict = field(default_factory=dict)
+    operating_inputs: dict = field(default_factory=dict)
     training: dict = field(default_factory=dict)
 
     def __post_init__(self):
@@ -145,6 +149,9 @@ def check_input(spec: ModelSpec, data: SignalSet, *, allow_mismatch: bool = Fals
     if spec.model_type == "cnn":
         check_inputs(spec.representation_spec(), data.n_samples, data.fs_hz, data.shaft_hz(), data.mesh_cps(),
                      z_pinion=data.pair.z_pinion or None)
+        for col in spec.operating_inputs.get("columns", ()):
+            require(col == "signal_rms" or col in data.labels, "labels", list(data.labels.columns),
+                    f"a {col} column (the model takes the operating point as a side input)")
     else:
         need = int(np.ceil(spec.n_samples * 0.5))
         require(data.n_samples >= need, "n_samples", data.n_samples,

@@ -36,6 +36,7 @@ from gearpit.errors import InputError, require, require_positive, require_range
 from models.augment import AugmentConfig, augment_batch
 from models.classifier import CNNClassifier, build_network
 from models.data import TEETH_CLASSES, SignalSet
+from models.operating import check_columns, fit_operating, operating_features
 from models.representations import RepresentationSpec, check_inputs, represent
 from models.spec import TASKS, ModelSpec, training_ranges
 
@@ -62,6 +63,10 @@ class TrainConfig:
         Weights of the severity regression and pitted-teeth losses.
     widths : tuple of int
         Channels of the convolution blocks; ``hidden`` and ``dropout`` of the head.
+    operating_inputs : tuple of str
+        Side inputs of the network (:mod:`models.operating`): ``speed_rpm``,
+        ``torque_nm`` (label columns), ``signal_rms`` (the record's level, which
+        binds the model to the sensor path); empty: none.
     seed : int
     threads : int
         torch CPU threads (at most 2). Default 1: on a shared, loaded machine two
@@ -84,6 +89,7 @@ class TrainConfig:
     widths: tuple[int, ...] = (16, 32, 48, 64, 96)
     hidden: int = 64
     dropout: float = 0.1
+    operating_inputs: tuple[str, ...] = ()
     seed: int = 0
     threads: int = 1
     max_seconds: float = 900.0
@@ -104,6 +110,7 @@ class TrainConfig:
         require_range("teeth_weight", self.teeth_weight, 0.0, 100.0)
         require_range("dropout", self.dropout, 0.0, 0.9)
         object.__setattr__(self, "widths", tuple(int(w) for w in self.widths))
+        object.__setattr__(self, "operating_inputs", check_columns(self.operating_inputs))
         require(len(self.widths) >= 1 and all(w >= 1 for w in self.widths), "widths", self.widths, "positive integers")
         require(isinstance(self.seed, (int, np.integer)) and 0 <= self.seed < 2**32, "seed", self.seed,
                 "an integer in [0, 2**32)")
@@ -124,6 +131,8 @@ class TrainConfig:
             v["augment"] = AugmentConfig.from_dict(v["augment"])
         if "widths" in v:
             v["widths"] = tuple(v["widths"])
+        if "operating_inputs" in v:
+            v["operating_inputs"] = tuple(v["operating_inputs"])
         return cls(**v)
 
     def to_dict(self) -> dict:
@@ -131,6 +140,7 @@ class TrainConfig:
         d["representation"] = self.representation.to_dict()
         d["augment"] = self.augment.to_dict()
         d["widths"] = list(self.widths)
+        d["operating_inputs"] = list(self.operating_inputs)
         return d
 
 
@@ -201,12 +211,15 @@ def train_cnn(data: SignalSet, config: TrainConfig = TrainConfig(), *, log=None)
                      pair=data.pair, representation=rep.to_dict(), severity_classes=classes,
                      teeth_classes=list(TEETH_CLASSES), severity_scale=scale, channel=data.channel,
                      ranges=training_ranges(data.labels),
-                     train_config={**config.to_dict(), "architecture": arch})
+                     train_config={**config.to_dict(), "architecture": arch},
+                     operating_inputs=fit_operating(data.subset(tr), config.operating_inputs))
+    side_all = operating_features(data, spec.operating_inputs)
     fr, mc, z = data.shaft_hz(), data.mesh_cps(), data.pair.z_pinion or None
     x_val = torch.from_numpy(represent(data.signals[va], rep, fs_hz=data.fs_hz,
                                        shaft_hz=None if fr is None else fr[va], mesh_cps=None if mc is None else mc[va],
                                        z_pinion=z, starts=0.5))
     yv = [torch.from_numpy(a[va]) for a in (y_cls, y_sev, y_teeth)]
+    side_val = torch.from_numpy(side_all[va]) if config.operating_inputs else None
 
     t0 = time.perf_counter()
     history: list[dict] = []
@@ -229,7 +242,7 @@ def train_cnn(data: SignalSet, config: TrainConfig = TrainConfig(), *, log=None)
                 x = torch.from_numpy(represent(xb, rep, fs_hz=data.fs_hz, shaft_hz=None if fr is None else fr[b],
                                                mesh_cps=None if mc is None else mc[b], z_pinion=z, starts=starts,
                                                speed_factors=speed))
-                out = net(x)
+                out = net(x, torch.from_numpy(side_all[b]) if config.operating_inputs else None)
                 loss = _loss(out, torch.from_numpy(y_cls[b]), torch.from_numpy(y_sev[b]),
                              torch.from_numpy(y_teeth[b]), config)
                 opt.zero_grad()
@@ -240,7 +253,7 @@ def train_cnn(data: SignalSet, config: TrainConfig = TrainConfig(), *, log=None)
             sched.step()
             net.eval()
             with torch.no_grad():
-                out = net(x_val)
+                out = net(x_val, side_val)
                 vloss = float(_loss(out, *yv, config))
                 vacc = float((out["severity_class"].argmax(1) == yv[0]).float().mean())
                 vacc_t = float((out["teeth"].argmax(1) == yv[2]).float().mean())
