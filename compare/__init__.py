@@ -9,8 +9,9 @@
 - ``error``         sensor gain fit, noise floors, residuals, the scalar error per view and in total
 - ``model``         the comparison model (TOML the user edits): drive train, effects, plugins -> simulation cases
 - ``comparison``    one comparison end to end (measurement + model -> :class:`Comparison`), noise matching
+- ``calibration``   the drive-train nuisances (damping, bearing stiffness) fitted to the measurement first
 - ``disagreements`` the largest disagreements, ranked, in physical terms
-- ``fitspace``      which parameters of an effect are fitted, on which scale, from which starting points
+- ``fitspace``      an effect's declared fit parameters as search coordinates; starting points
 - ``search``        the batched search rounds and the quadratic surrogate
 - ``attribution``   fit every missing registered effect, rank by error reduction, flag the unexplained
 - ``ledger``        append-only history of comparisons next to the model

@@ -148,18 +148,23 @@ class Comparison:
     evaluation: Evaluation
     disagreements: list
     model_signal: np.ndarray = field(repr=False, default=None)
+    calibration: object = None      # compare.calibration.Calibration that made ``model``'s drive train, if any
 
     @property
     def error_db(self) -> dict:
         return {**self.evaluation.residuals.view_error_db, "total": self.evaluation.residuals.total_db}
 
 
-def compare(measurement: Measurement, model, *, seed: int = 0, reference: Reference | None = None) -> Comparison:
-    """Compare ``model`` (a :class:`compare.model.ComparisonModel`) with ``measurement``."""
+def compare(measurement: Measurement, model, *, seed: int = 0, reference: Reference | None = None,
+            calibration=None) -> Comparison:
+    """Compare ``model`` (a :class:`compare.model.ComparisonModel`) with ``measurement`` as it is (no nuisance
+    calibration: :func:`compare.calibration.calibrated_compare` calibrates first; ``calibration`` only records
+    the one that made ``model``)."""
     from compare.disagreements import rank_disagreements
 
     ref = reference if reference is not None else prepare_reference(measurement)
     (y,) = simulate_model(ref, model, seed=seed)
     ev = evaluate(ref, y, measurement.fs_hz, seed=seed, keep_curves=True, keep_signal=True)
     dis = rank_disagreements(ref, ev)
-    return Comparison(reference=ref, model=model, evaluation=ev, disagreements=dis, model_signal=ev.x)
+    return Comparison(reference=ref, model=model, evaluation=ev, disagreements=dis, model_signal=ev.x,
+                      calibration=calibration)

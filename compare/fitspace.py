@@ -1,21 +1,19 @@
 """Which parameters of an effect the attribution fits, on which scale, and the starting grids.
 
-Rules (any registered effect, built-in or plugin):
+Each effect declares what the comparison fits in its ``fit_parameters``
+(:meth:`datagen.effects.base.Effect.fit_declaration`: field names or
+:class:`datagen.effects.base.Fit` entries with bounds and a log or linear scale;
+a default rule for effects that declare nothing). Built-in effects and user
+plugins declare theirs the same way; this module only turns a declaration into
+search coordinates:
 
-- an effect class may name its fit parameters in a class attribute
-  ``fit_parameters = ("a", "b")``; otherwise the first :data:`MAX_FIT`
-  numeric fields whose unit is not ``rad`` are fitted (phases leave the
-  amplitude spectra, envelope and TSA levels unchanged, so they are held at
-  their defaults); every other field keeps its default;
-- a parameter is searched on a log scale (from ``max(lo, hi / 1000)`` to ``hi``)
-  when its bounds are positive and span more than a factor :data:`LOG_SPAN`, or
-  when they start at 0 and end at most at 1 (SI magnitudes such as lengths in m
-  or fractions, where 0 means "off"); otherwise linearly (a grade, a count);
+- a parameter is searched in ``u`` in [0, 1]: linearly between its bounds, or
+  in log10 from ``max(lo, hi / 1000)`` to ``hi`` on a log scale;
 - a parameter in Hz starts from the frequencies the measurement itself points
   to (:func:`frequency_seeds`): centres of bands, lines at no order, and
   modulation offsets (sideband spacings) where the model falls short;
-- the first string option (``choices``) is tried at every value once the
-  numeric parameters have a first estimate.
+- the declared string option is tried at every value once the numeric
+  parameters have a first estimate.
 """
 from __future__ import annotations
 
@@ -24,20 +22,9 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-MAX_FIT = 2
-LOG_SPAN = 30.0
 GRID_POINTS = 6
 #: measurement-chain effects: fitted in every comparison (gain, noise floor), never candidates
 CHAIN_EFFECTS = ("noise",)
-#: fit parameters of built-in effects whose field order alone would pick a degenerate one
-#: (a housing mass only scales the level, which the gain fit absorbs)
-DEFAULT_FIT_PARAMETERS = {
-    "transmission_path": ("housing_frequency_hz", "housing_damping_ratio"),
-    "speed_fluctuation": ("frequency_hz", "amplitude_fraction"),
-    "torque_fluctuation": ("frequency_hz", "amplitude_fraction"),
-    # the displaced tooth is given in units of the grade's f_pt: grade and factor trade off along a valley
-    "pitch_error": ("grade",),
-}
 
 
 @dataclass(frozen=True)
@@ -63,8 +50,10 @@ class FitParameter:
         u = np.clip(np.asarray(u, float), 0.0, 1.0)
         if self.log:
             a = max(self.lo, self.hi / 1000.0)
-            return 10 ** (math.log10(a) + u * (math.log10(self.hi) - math.log10(a)))
-        return self.lo + u * (self.hi - self.lo)
+            v = 10 ** (math.log10(a) + u * (math.log10(self.hi) - math.log10(a)))
+        else:
+            v = self.lo + u * (self.hi - self.lo)
+        return np.clip(v, self.lo, self.hi)     # no rounding past a bound (the effect would refuse it)
 
     def sigma_from_u(self, value: float, sigma_u: float) -> float:
         """1-sigma in parameter units from a 1-sigma in the search coordinate (linearised)."""
@@ -91,21 +80,15 @@ class FitSpace:
 
 
 def fit_space(effect_cls) -> FitSpace:
-    """The :class:`FitSpace` of a registered effect class (module docstring)."""
-    named = getattr(effect_cls, "fit_parameters", None) or DEFAULT_FIT_PARAMETERS.get(effect_cls.name)
-    numeric = [f for f in fields(effect_cls) if "bounds" in f.metadata]
-    if named is None:
-        named = [f.name for f in numeric if f.metadata.get("unit") != "rad"][:MAX_FIT]
-    by_name = {f.name: f for f in numeric}
-    params = []
-    for name in named:
-        f = by_name[name]
-        lo, hi = (float(v) for v in f.metadata["bounds"])
-        log = (lo > 0 and hi / lo > LOG_SPAN) or (lo == 0 and 0 < hi <= 1.0)
-        params.append(FitParameter(name, lo, hi, f.metadata.get("unit", "-"), float(f.default), log))
-    choice = next(((f.name, tuple(f.metadata["choices"])) for f in fields(effect_cls) if "choices" in f.metadata), None)
+    """The :class:`FitSpace` of a registered effect class (its :meth:`~datagen.effects.base.Effect.fit_declaration`)."""
+    fits, choice = effect_cls.fit_declaration()
+    defaults = effect_cls().params()
+    units = {f.name: f.metadata.get("unit", "-") for f in fields(effect_cls)}
+    params = tuple(FitParameter(f.name, f.bounds[0], f.bounds[1], units[f.name],
+                                float(min(max(defaults[f.name], f.bounds[0]), f.bounds[1])), f.scale == "log")
+                   for f in fits)
     probe = effect_cls()
-    return FitSpace(effect_cls.name, tuple(params), choice, bool(probe.is_nonlinear or probe.is_nonstationary))
+    return FitSpace(effect_cls.name, params, choice, bool(probe.is_nonlinear or probe.is_nonstationary))
 
 
 def grid(p: FitParameter, n: int = GRID_POINTS) -> np.ndarray:

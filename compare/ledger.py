@@ -5,7 +5,11 @@
     {"run": 3, "time_utc": "2026-11-21T06:10:00Z", "measurement": "rig.csv", "measurement_sha256": "...",
      "model": "eccentricity_pinion(amplitude_m=0.00015, phase_rad=0.0)", "effects": [{"name": ..., ...}],
      "speed_rpm": 1000.0, "gain_db": 11.3, "error_db": {"order": ..., ..., "total": ...},
-     "claimed": "pitch_error", "candidates": [{"effect": ..., "params": {...}, "reduction": ...}, ...]}
+     "claimed": "pitch_error", "candidates": [{"effect": ..., "params": {...}, "reduction": ...}, ...],
+     "calibration": {"parameters": {"mesh_damping_ratio": 0.063, ...}, "sigma": {...}, "start": {...},
+                     "error_before_db": 0.77, "error_db": 0.65, ...}}
+
+``error_db`` is that of the calibrated model when the nuisances were calibrated (``calibration`` not null).
 
 Rows are only ever appended (one ``write`` of one line per comparison), so the
 history of "add an effect, watch the error fall" stays a table.
@@ -59,11 +63,12 @@ def make_row(comparison, attribution=None, *, run: int, measurement_path: str | 
            "measurement_sha256": file_sha256(measurement_path) if measurement_path else None,
            "model": model.describe(), "effects": [e.to_dict() for e in model.effects],
            "speed_rpm": ref.speed.speed_rpm, "gain_db": comparison.evaluation.residuals.gain_db,
-           "error_db": comparison.error_db, "claimed": None, "candidates": []}
+           "error_db": comparison.error_db, "claimed": None, "candidates": [],
+           "calibration": comparison.calibration.to_dict() if comparison.calibration is not None else None}
     if attribution is not None:
         row["claimed"] = attribution.claimed[0].effect if attribution.claimed else None
         row["candidates"] = [{"effect": c.effect, "params": c.params, "reduction": c.reduction,
-                              "error_db": c.error_db} for c in attribution.candidates]
+                              "error_db": c.error_db, "nuisance": c.nuisance} for c in attribution.candidates]
     return row
 
 

@@ -15,6 +15,15 @@ keys of its own::
     [[effects]]                             # optional, repeatable: name + parameters (SI)
     name = "eccentricity_pinion"
     amplitude_m = 2e-05
+    [calibration]                           # optional: nuisance calibration (compare.calibration)
+    enabled = true                          # default false: the [drivetrain] values as they are
+    parameters = ["mesh_damping_ratio", "bearing_n_per_m", "bearing_damping_ratio"]
+
+With ``[calibration] enabled = true`` (or ``gearpit compare --calibrate``) the
+drive-train nuisances named there are fitted to the measurement before the
+attribution (:mod:`compare.calibration`, which says why it is off by default),
+starting from the ``[drivetrain]`` values (or the defaults); the fitted values
+are reported and recorded in the ledger, not written back into this file.
 
 A missing model file means the baseline: no effects, default drive train,
 sensor ``acc_pinion_loa_m_s2``.
@@ -30,7 +39,8 @@ from gearpit.atomic import atomic_path
 from gearpit.errors import InputError, require
 from gearpit.tomlio import check_keys, read_toml
 
-MODEL_KEYS = {"description", "sensor", "plugins", "drivetrain", "solver", "stiffness", "pits", "effects"}
+MODEL_KEYS = {"description", "sensor", "plugins", "drivetrain", "solver", "stiffness", "pits", "effects", "calibration"}
+CALIBRATION_KEYS = {"enabled", "parameters"}
 DEFAULT_SENSOR = "acc_pinion_loa_m_s2"
 
 
@@ -43,6 +53,7 @@ class ComparisonModel:
     description: str = ""
     plugins: tuple = ()
     tables: dict = field(default_factory=dict)   # drivetrain / solver / stiffness / pits, as in a case file
+    calibration: dict = field(default_factory=dict)   # [calibration]: enabled, parameters
     path: Path | None = None
 
     @classmethod
@@ -66,7 +77,20 @@ class ComparisonModel:
         tables = {k: d[k] for k in ("drivetrain", "solver", "stiffness", "pits") if k in d}
         for k, v in tables.items():
             require(isinstance(v, dict), f"model.{k}", v, "a table")
-        model = cls(effects=built, sensor=sensor, description=desc, plugins=tuple(plugins), tables=tables, path=path)
+        cal = d.get("calibration", {})
+        require(isinstance(cal, dict), "model.calibration", cal, "a table")
+        check_keys(cal, CALIBRATION_KEYS, "model.calibration")
+        require(isinstance(cal.get("enabled", True), bool), "model.calibration.enabled", cal.get("enabled"),
+                "true or false")
+        if "parameters" in cal:
+            from compare.calibration import CalibrationSettings
+
+            ps = cal["parameters"]
+            require(isinstance(ps, list) and all(isinstance(p, str) for p in ps), "model.calibration.parameters", ps,
+                    "a list of drive-train field names")
+            CalibrationSettings(parameters=tuple(ps))  # validates the names
+        model = cls(effects=built, sensor=sensor, description=desc, plugins=tuple(plugins), tables=tables,
+                    calibration=dict(cal), path=path)
         _check_unique(model.effects)
         return model
 
@@ -110,8 +134,31 @@ class ComparisonModel:
         if self.plugins:
             d["plugins"] = list(self.plugins)
         d.update(self.tables)
+        if self.calibration:
+            d["calibration"] = dict(self.calibration)
         d["effects"] = [e.to_dict() for e in self.effects]
         return d
+
+    @property
+    def calibrates(self) -> bool:
+        """Whether the comparison calibrates the drive-train nuisances first (``[calibration] enabled``,
+        default :data:`compare.calibration.CALIBRATE_BY_DEFAULT`)."""
+        from compare.calibration import CALIBRATE_BY_DEFAULT
+
+        return bool(self.calibration.get("enabled", CALIBRATE_BY_DEFAULT))
+
+    def calibration_settings(self, seed: int = 0):
+        """The :class:`compare.calibration.CalibrationSettings` of this model."""
+        from compare.calibration import CalibrationSettings
+
+        ps = self.calibration.get("parameters")
+        return CalibrationSettings(seed=seed) if ps is None else CalibrationSettings(parameters=tuple(ps), seed=seed)
+
+    def with_drivetrain(self, values: dict) -> "ComparisonModel":
+        """The model with ``values`` (drive-train fields, SI) in its ``[drivetrain]`` table."""
+        tables = dict(self.tables)
+        tables["drivetrain"] = {**tables.get("drivetrain", {}), **{k: float(v) for k, v in values.items()}}
+        return replace(self, tables=tables)
 
     def save(self, path: str | Path | None = None) -> Path:
         """Write the TOML form atomically (to ``path`` or where it was loaded from)."""

@@ -4,7 +4,7 @@
 gain, error per view and in total, every location's measured and model level
 and residual (the residual map), the ranked disagreements, the candidate
 effects with fitted parameters and uncertainty, the unexplained disagreements
-and the ledger - as plain JSON. :func:`write_html` renders the same document,
+the nuisance calibration and the ledger - as plain JSON. :func:`write_html` renders the same document,
 plus the measured-versus-model overlays of each view, as one HTML file whose
 figures are embedded PNGs (base64): no external files, no network.
 """
@@ -58,6 +58,7 @@ def document(comparison, attribution=None, ledger_rows=(), *, measurement_path: 
         "model": {"path": model_path, "description": comparison.model.describe(), "sensor": comparison.model.sensor,
                   "effects": [e.to_dict() for e in comparison.model.effects]},
         "gain_db": g,
+        "calibration": comparison.calibration.to_dict() if comparison.calibration is not None else None,
         "noise_added_rms": ev.noise_added_rms,
         "error_db": {k: float(v) for k, v in comparison.error_db.items()},
         "locations": locations,
@@ -109,6 +110,21 @@ def _fmt(v, nd=3):
     return str(v)
 
 
+def _calibration_html(cal: dict | None) -> list[str]:
+    """The nuisance-calibration section (compare.calibration)."""
+    if cal is None:
+        return ["<p>Nuisance calibration: off (the drive train as the model file gives it).</p>"]
+    rows = [[k, _fmt(cal["start"].get(k), 4), _fmt(v, 4), _fmt(cal["sigma"].get(k), 2)]
+            for k, v in cal["parameters"].items()]
+    return ["<h2>Nuisance calibration</h2>",
+            "<p>Drive-train parameters nobody measures, fitted to the measurement before the attribution together "
+            "with the sensor gain (module <code>compare.calibration</code>); the calibrated model is the baseline "
+            "every candidate effect is measured against.</p>",
+            _table(["parameter", "model file / default", "calibrated", "1 sigma ('-': not identifiable)"], rows),
+            f"<p>Total error {cal['error_before_db']:.3f} dB before, {cal['error_db']:.3f} dB after "
+            f"({cal['n_simulations']} simulations, {cal['elapsed_s']:.1f} s).</p>"]
+
+
 def write_html(comparison, doc: dict, path: str | Path) -> Path:
     """Render ``doc`` (from :func:`document`) and the overlays of ``comparison`` as one HTML file."""
     from compare import plots
@@ -123,6 +139,7 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
              f"(nominal {m['speed_rpm_nominal']:g}, refined from the {m['speed_method']}), torque {m['torque_nm']:g} N m.</p>",
              f"<p>Model: <code>{html.escape(doc['model']['description'])}</code>. Sensor gain fitted: "
              f"{doc['gain_db']:+.2f} dB.</p>",
+             *_calibration_html(doc.get("calibration")),
              "<h2>Error</h2>",
              _table(["view", "error (dB)"], [[k, f"{v:.3f}"] for k, v in e.items()]),
              "<p>Definition: weighted RMS of the residuals in dB after the gain fit and the noise floors "

@@ -141,6 +141,26 @@ def round_c(s: Search) -> list[Trial]:
     return [t for t in out if not s.seen(t)]
 
 
+def fit_quadratic(U: np.ndarray, y: np.ndarray, bounds: list) -> tuple[np.ndarray, np.ndarray, float]:
+    """Least-squares ``y = c + g.u + 1/2 u'Hu`` through points ``U`` (m, n) and its minimum inside ``bounds``
+    (one ``(lo, hi)`` per coordinate, L-BFGS-B); returns (u_min, H, y_min)."""
+    m, n = U.shape
+    cols = [np.ones(m)] + [U[:, j] for j in range(n)]
+    pairs = [(i, j) for i in range(n) for j in range(i, n)]
+    cols += [U[:, i] * U[:, j] * (0.5 if i == j else 1.0) for i, j in pairs]
+    coef, *_ = np.linalg.lstsq(np.column_stack(cols), y, rcond=None)
+    g = coef[1:1 + n]
+    H = np.zeros((n, n))
+    for (i, j), c in zip(pairs, coef[1 + n:]):
+        H[i, j] = H[j, i] = c
+
+    def f(u):
+        return coef[0] + g @ u + 0.5 * u @ H @ u
+
+    res = minimize(f, np.zeros(n), jac=lambda u: g + H @ u, bounds=bounds, method="L-BFGS-B")
+    return res.x, H, max(float(res.fun), 1e-12)
+
+
 def quadratic(s: Search):
     """Fit E^2 = c + g.u + 1/2 u'Hu on the points near the best; returns (u_min, H, E2_min) or None."""
     best = s.best
@@ -153,22 +173,8 @@ def quadratic(s: Search):
     pts = pts[:max(need + 2, 2 * need)]
     U = np.array([t.u - best.u for t in pts])
     y = np.array([t.error_db ** 2 for t in pts])
-    cols = [np.ones(len(pts))] + [U[:, j] for j in range(n)]
-    pairs = [(i, j) for i in range(n) for j in range(i, n)]
-    cols += [U[:, i] * U[:, j] * (0.5 if i == j else 1.0) for i, j in pairs]
-    A = np.column_stack(cols)
-    coef, *_ = np.linalg.lstsq(A, y, rcond=None)
-    g = coef[1:1 + n]
-    H = np.zeros((n, n))
-    for (i, j), c in zip(pairs, coef[1 + n:]):
-        H[i, j] = H[j, i] = c
-
-    def f(u):
-        return coef[0] + g @ u + 0.5 * u @ H @ u
-
-    bounds = [(-bu, 1 - bu) for bu in best.u]
-    res = minimize(f, np.zeros(n), jac=lambda u: g + H @ u, bounds=bounds, method="L-BFGS-B")
-    return best.u + res.x, H, max(float(res.fun), 1e-12)
+    du, H, e2 = fit_quadratic(U, y, [(-bu, 1 - bu) for bu in best.u])
+    return best.u + du, H, e2
 
 
 def round_d(s: Search) -> list[Trial]:

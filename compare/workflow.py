@@ -8,7 +8,11 @@ Used by ``gearpit compare`` and by ``experiments/compare_walkthrough.py``.
 - ``add`` items are ``EFFECT[:key=value,...]``; without values the parameters
   fitted by the latest comparison in the ledger are used (else the defaults);
   the model file is rewritten with the effect added;
-- ``plugins`` are Python files with user effects; they are recorded in the model.
+- ``plugins`` are Python files with user effects; they are recorded in the model;
+- with ``calibrate=True`` (or the model's ``[calibration] enabled = true``) the drive-train nuisances are
+  calibrated to the measurement before the comparison (:mod:`compare.calibration`, off by default: its
+  docstring says why): the calibrated model is then the baseline the attribution measures every candidate
+  against.
 """
 from __future__ import annotations
 
@@ -16,7 +20,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from compare.attribution import Attribution, AttributionSettings, attribute
-from compare.comparison import Comparison, compare, prepare_reference
+from compare.calibration import calibrated_compare
+from compare.comparison import Comparison, prepare_reference
 from compare.ledger import append_row, last_fit, ledger_path, make_row, read_ledger
 from compare.measurement import load_measurement
 from compare.model import ComparisonModel, parse_add
@@ -62,8 +67,9 @@ def extend_model(model: ComparisonModel, add: list[str], rows: list[dict], messa
 def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_path: str | Path | None = None,
         add: list[str] = (), plugins: list[str] = (), attribution: bool = True, candidates: list[str] | None = None,
         report: str | Path | None = None, json_path: str | Path | None = None, seed: int = 0,
-        settings: AttributionSettings | None = None, parallel: bool = True) -> Outcome:
-    """The whole loop (module docstring); returns everything it computed."""
+        settings: AttributionSettings | None = None, parallel: bool = True, calibrate: bool | None = None) -> Outcome:
+    """The whole loop (module docstring); returns everything it computed. ``calibrate``: calibrate the
+    nuisances (None: as the model file says, default yes)."""
     messages: list[str] = []
     measurement = load_measurement(measurement_path, meta)
     mpath = Path(model_path) if model_path is not None else default_model_path(measurement_path)
@@ -85,12 +91,16 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
         model.save(mpath)
         messages.append(f"model written: {mpath}")
     ref = prepare_reference(measurement)
-    comparison = compare(measurement, model, seed=seed, reference=ref)
+    comparison = calibrated_compare(measurement, model, reference=ref, seed=seed, calibrate_nuisances=calibrate)
+    cal = comparison.calibration
+    if cal is not None:
+        messages.append("nuisances calibrated: " + ", ".join(f"{k} {v:.4g}" for k, v in cal.values.items())
+                        + f" (error {cal.error_before_db:.2f} -> {cal.error_db:.2f} dB)")
     att = None
     if attribution:
-        att = attribute(ref, model, comparison.evaluation.residuals.residual_db, candidates=candidates,
+        att = attribute(ref, comparison.model, comparison.evaluation.residuals.residual_db, candidates=candidates,
                         settings=settings or AttributionSettings(seed=seed), disagreements=comparison.disagreements,
-                        parallel=parallel)
+                        parallel=parallel, calibration=cal)
     row = make_row(comparison, att, run=len(rows) + 1, measurement_path=str(measurement_path))
     append_row(lpath, row)
     rows = rows + [row]
@@ -127,13 +137,14 @@ def write_rig_files(measurement, out: str | Path, *, stem: str = "rig") -> Path:
     return csv
 
 
-def hidden_effect_loop(out: str | Path, hidden: str = "pitch_error", *, seed: int = 0) -> tuple[dict, Outcome, Outcome]:
+def hidden_effect_loop(out: str | Path, hidden: str = "pitch_error", *, seed: int = 0,
+                       calibrate: bool | None = None) -> tuple[dict, Outcome, Outcome]:
     """The README's full loop on a simulated rig with a hidden effect (:mod:`compare.synthetic`).
 
-    Writes ``out/rig.csv`` + ``rig.toml``, compares the baseline model with attribution over every registered
-    effect (``out/report_1.html``/``.json``), adds the claimed effect with its fitted parameters and compares
-    again (``report_2``). Returns a summary dict and the two outcomes (the second is the first when nothing
-    was claimed).
+    Writes ``out/rig.csv`` + ``rig.toml``, compares the baseline model (nuisances calibrated with
+    ``calibrate``) with attribution over every registered effect (``out/report_1.html``/``.json``), adds the
+    claimed effect with its fitted parameters and compares again (``report_2``). Returns a summary dict and
+    the two outcomes (the second is the first when nothing was claimed).
     """
     from compare.synthetic import hidden_effect_measurement
 
@@ -142,15 +153,18 @@ def hidden_effect_loop(out: str | Path, hidden: str = "pitch_error", *, seed: in
         (out / stale).unlink(missing_ok=True)
     m, ex = hidden_effect_measurement(hidden)
     csv = write_rig_files(m, out)
-    first = run(csv, report=out / "report_1.html", json_path=out / "report_1.json", seed=seed)
+    first = run(csv, report=out / "report_1.html", json_path=out / "report_1.json", seed=seed, calibrate=calibrate)
     claimed = first.attribution.claimed[0].effect if first.attribution.claimed else None
     second = first
     if claimed is not None:
         second = run(csv, add=[claimed], attribution=False, report=out / "report_2.html",
-                     json_path=out / "report_2.json", seed=seed)
+                     json_path=out / "report_2.json", seed=seed, calibrate=calibrate)
     e0, e1 = first.comparison.error_db["total"], second.comparison.error_db["total"]
+    cal0, cal1 = first.comparison.calibration, second.comparison.calibration
     summary = {"hidden": ex.effect, "claimed": claimed,
                "fitted": first.attribution.claimed[0].params if claimed else None,
                "error_before_db": e0, "error_after_db": e1 if claimed else None,
-               "attribution_s": first.attribution.elapsed_s}
+               "attribution_s": first.attribution.elapsed_s,
+               "calibration_before": cal0.to_dict() if cal0 is not None else None,
+               "calibration_after": cal1.to_dict() if (cal1 is not None and claimed) else None}
     return summary, first, second

@@ -1,4 +1,4 @@
-"""Attribution on 'measurements' with a hidden effect (compare.attribution, compare.synthetic).
+"""Attribution on 'measurements' with a hidden effect (compare.attribution, compare.calibration, compare.synthetic).
 
 Reference: the issue's acceptance criteria. Each measurement is simulated with one effect the baseline model
 lacks, on a rig whose mesh/bearing damping, bearing stiffness, noise (SNR 30 dB) and sensor gain (x3.7) differ
@@ -7,6 +7,12 @@ ranks first and is claimed; adding it with the fitted parameters cuts the total 
 checked parameter is within the tolerance of compare.synthetic.HIDDEN_EXAMPLES. Controls: no hidden effect ->
 nothing claimed; a disturbance outside the registry (rolling-bearing defect, mains hum) -> flagged unexplained,
 no gear effect claimed. The default (fast) tests use a reduced candidate list; the slow ones the whole registry.
+These run the comparison as it is by default (no nuisance calibration: compare.calibration says why).
+
+Nuisance calibration (compare.calibration; source: the simulator's known truth): on a rig without hidden effect
+it recovers the nuisances within NUISANCE_TOLERANCE; with model and rig identical it stays at the truth and its
+error at the noise floor (two independent noise draws); switched on, it lets transmission_path (nuisance-limited
+without it) be claimed and halve the calibrated baseline's error.
 """
 from __future__ import annotations
 
@@ -16,20 +22,22 @@ import numpy as np
 import pytest
 
 from compare.attribution import attribute
+from compare.calibration import calibrate, calibrated_compare
 from compare.comparison import compare, prepare_reference
 from compare.model import ComparisonModel
-from compare.synthetic import HIDDEN_EXAMPLES, check_fit, hidden_effect_measurement, rig_measurement
+from compare.synthetic import HIDDEN_EXAMPLES, NUISANCE, check_fit, hidden_effect_measurement, rig_measurement
 from datagen.effects import EffectSpec
 
 FAST_CANDIDATES = ["pitch_error", "eccentricity_pinion", "profile_error", "tip_relief"]
 
 
 def _attribute(m, candidates=None, model=None):
+    """The user's loop: calibrate the nuisances, compare the calibrated model, attribute."""
     model = model or ComparisonModel()
     ref = prepare_reference(m)
-    c = compare(m, model, reference=ref)
-    a = attribute(ref, model, c.evaluation.residuals.residual_db, candidates=candidates,
-                  disagreements=c.disagreements)
+    c = calibrated_compare(m, model, reference=ref)
+    a = attribute(ref, c.model, c.evaluation.residuals.residual_db, candidates=candidates,
+                  disagreements=c.disagreements, calibration=c.calibration)
     return ref, c, a
 
 
@@ -64,11 +72,17 @@ def test_disturbance_outside_the_registry_is_unexplained(disturbance):
 
 #: effects whose signature, at the tested nuisance differences, is of the same size as what the nuisances
 #: themselves do to the mesh-harmonic levels (measured: the model WITH the true effect still has 0.6-0.8 of the
-#: baseline error): they rank first, but the error cannot halve and the fit is loose
+#: baseline error): they rank first, but the error cannot halve and the fit is loose. The error's own noise floor
+#: (true effect and true nuisances against the rig: 0.6-0.9 dB, two independent noise draws at SNR 30 dB) is the
+#: limit for the three whose baseline error is ~1 dB; calibrating the nuisances (compare.calibration) does not
+#: lift it (calibrated baseline -> calibrated model with the claimed effect, measured: hertz_nonlinear 0.92 ->
+#: 0.61 dB (x0.66), eccentricity_wheel 1.68 -> 0.90 dB (x0.53), tip_relief no longer ranks first), but it does
+#: for transmission_path (test_calibration_lets_transmission_path_halve_the_error)
 NUISANCE_LIMITED = {
     "hertz_nonlinear": "shifts the mesh resonance like the bearing-stiffness nuisance does (true model: 0.76 x error)",
     "tip_relief": "changes mesh-harmonic levels like the damping nuisances do (fit: 0.78 x error)",
-    "transmission_path": "the housing filters bearing forces, which the bearing nuisances change (true model: 0.67 x)",
+    "transmission_path": "the housing filters bearing forces, which the bearing nuisances change (true model: 0.67 x); "
+                         "passes with the nuisance calibration on",
     "eccentricity_wheel": "sidebands only at 2000 rpm, where the nuisance floor is 1.0 dB (fit: 0.58 x error)",
 }
 
@@ -78,8 +92,9 @@ def _hidden_run(name):
     m, ex = hidden_effect_measurement(name)
     ref, c0, a = _attribute(m, model=ex.model())
     top = a.candidates[0]
-    c1 = compare(m, ex.model().with_effect(EffectSpec.from_dict({"name": top.effect, **top.params}).build()),
-                 reference=ref)
+    # the user's next step: add the claimed effect with its fitted parameters, compare again
+    model1 = ex.model().with_effect(EffectSpec.from_dict({"name": top.effect, **top.params}).build())
+    c1 = calibrated_compare(m, model1, reference=ref)
     return ex, c0, a, c1
 
 
@@ -113,3 +128,80 @@ def test_controls_with_the_whole_registry(disturbance):
     assert not a.claimed, [(x.effect, x.reduction) for x in a.candidates]
     if disturbance is not None:
         assert a.unexplained
+
+
+#: how closely the calibration recovers each nuisance on a rig without hidden effect (source: the simulator's
+#: truth): max(fit / true, true / fit) at most this. The bearing stiffness sets the mesh resonance and is pinned
+#: down to a few % (measured on the 1 s rigs below: 1.04, 1.03; asserted 1.08); the mesh damping sets the
+#: resonance peak (measured 1.12, 1.15; asserted 1.25); the bearing damping only damps bearing modes far from
+#: the excitation and is weakly identifiable (measured 1.43, 1.07; asserted a factor 2).
+NUISANCE_TOLERANCE = {"mesh_damping_ratio": 1.25, "bearing_n_per_m": 1.08, "bearing_damping_ratio": 2.0}
+
+
+def _within(values, truth):
+    return {k: max(values[k] / truth[k], truth[k] / values[k]) <= tol for k, tol in NUISANCE_TOLERANCE.items()}
+
+
+def test_calibration_recovers_the_nuisances_of_a_rig_without_hidden_effect():
+    """Rig with NUISANCE drive train, model at the defaults: the calibrated values are within
+    NUISANCE_TOLERANCE of the rig's, and the error falls to at most that of the true model (+0.05 dB)."""
+    m = rig_measurement(duration_s=1.0)
+    ref = prepare_reference(m)
+    cal = calibrate(ref, ComparisonModel())
+    ok = _within(cal.values, NUISANCE)
+    assert all(ok.values()), (cal.values, NUISANCE)
+    true_error = compare(m, ComparisonModel().with_drivetrain(NUISANCE), reference=ref).error_db["total"]
+    assert cal.error_db < cal.error_before_db and cal.error_db <= true_error + 0.05, (cal.error_db, true_error)
+    assert set(cal.to_dict()["parameters"]) == set(NUISANCE)
+
+
+def test_calibration_of_an_identical_model_stays_at_the_truth_and_the_noise_floor():
+    """Rig and model with the same (default) drive train: the calibration leaves the values within
+    NUISANCE_TOLERANCE of the truth, and the error stays at the noise floor: within 0.05 dB of the identical
+    model's own error, which is below 1 dB (independent noise draws at SNR 30 dB)."""
+    from datagen.lumped_model import DriveTrain
+
+    m = rig_measurement(duration_s=1.0, nuisance={})
+    ref = prepare_reference(m)
+    cal = calibrate(ref, ComparisonModel())
+    truth = {k: getattr(DriveTrain(), k) for k in NUISANCE}
+    assert cal.start == truth
+    ok = _within(cal.values, truth)
+    assert all(ok.values()), (cal.values, truth)
+    assert cal.error_before_db < 1.0 and abs(cal.error_db - cal.error_before_db) <= 0.05
+    assert cal.objective_db <= cal.objective_before_db
+
+
+def test_calibration_is_switched_by_the_model_file():
+    """Default and [calibration] enabled = false: the model's drive train as it is, no calibration recorded;
+    enabled = true with a parameter list: only those are calibrated."""
+    m = rig_measurement(duration_s=1.0)
+    for table in ({}, {"calibration": {"enabled": False}}):
+        model = ComparisonModel.from_dict({**table, "drivetrain": {"mesh_damping_ratio": 0.08}})
+        c = calibrated_compare(m, model)
+        assert c.calibration is None and c.model.tables["drivetrain"] == {"mesh_damping_ratio": 0.08}
+    model = ComparisonModel.from_dict({"calibration": {"enabled": True, "parameters": ["bearing_n_per_m"]}})
+    c = calibrated_compare(m, model)
+    assert set(c.calibration.values) == {"bearing_n_per_m"}
+    assert c.model.tables["drivetrain"]["bearing_n_per_m"] == c.calibration.values["bearing_n_per_m"]
+
+
+@pytest.mark.slow
+def test_calibration_lets_transmission_path_halve_the_error():
+    """With the nuisance calibration on (whole registry): transmission_path ranks first and is claimed; the model
+    with it (fitted parameters, calibrated again) has at most half the calibrated baseline's error; the housing
+    frequency is within the example's tolerance."""
+    m, ex = hidden_effect_measurement("transmission_path")
+    ref = prepare_reference(m)
+    model = ex.model()
+    c0 = calibrated_compare(m, model, reference=ref, calibrate_nuisances=True)
+    a = attribute(ref, c0.model, c0.evaluation.residuals.residual_db, disagreements=c0.disagreements,
+                  calibration=c0.calibration)
+    top = a.candidates[0]
+    assert top.effect == "transmission_path" and top.claimed, [(x.effect, x.reduction) for x in a.candidates[:3]]
+    model1 = model.with_effect(EffectSpec.from_dict({"name": top.effect, **top.params}).build())
+    c1 = calibrated_compare(m, model1, reference=ref, calibrate_nuisances=True)
+    assert c1.error_db["total"] <= 0.5 * c0.error_db["total"], (c1.error_db["total"], c0.error_db["total"])
+    ok, text = check_fit(ex, top.params)
+    assert ok, text
+

@@ -29,10 +29,11 @@ def rig(tmp_path_factory):
 
 
 def test_loop_compare_add_and_watch_the_error_fall(rig, capsys):
-    """Run 1 ranks pitch_error first; run 2 (--add pitch_error, parameters taken from the ledger) cuts the total
-    error by more than half; the ledger has both rows; the JSON validates against the schema; the HTML embeds
-    its figures (no external src)."""
-    assert main(["compare", str(rig / "rig.csv"), "--candidates", "pitch_error,eccentricity_wheel",
+    """Run 1 (nuisances calibrated) ranks pitch_error first; run 2 (--add pitch_error, parameters taken from the
+    ledger, calibrated again) cuts the total error by more than half; the ledger has both rows with the
+    calibrated nuisances; the JSON validates against the schema; the HTML embeds its figures (no external
+    src)."""
+    assert main(["compare", str(rig / "rig.csv"), "--candidates", "pitch_error,eccentricity_wheel", "--calibrate",
                  "--json", str(rig / "run1.json")]) == 0
     out1 = capsys.readouterr().out
     assert "pitch_error" in out1 and "<- claimed" in out1
@@ -42,7 +43,7 @@ def test_loop_compare_add_and_watch_the_error_fall(rig, capsys):
 
     jsonschema.validate(doc, SCHEMA)
     assert doc["attribution"]["candidates"][0]["effect"] == "pitch_error"
-    assert main(["compare", str(rig / "rig.csv"), "--add", "pitch_error", "--no-attribution",
+    assert main(["compare", str(rig / "rig.csv"), "--add", "pitch_error", "--no-attribution", "--calibrate",
                  "--report", str(rig / "run2.html"), "--json", str(rig / "run2.json")]) == 0
     capsys.readouterr()
     rows = read_ledger(rig / "rig.model.ledger.jsonl")
@@ -51,7 +52,27 @@ def test_loop_compare_add_and_watch_the_error_fall(rig, capsys):
     assert "pitch_error" in (rig / "rig.model.toml").read_text()
     html = (rig / "run2.html").read_text()
     assert html.count("data:image/png;base64,") >= 8 and 'src="http' not in html
+    assert "Nuisance calibration" in html
     jsonschema.validate(json.loads((rig / "run2.json").read_text()), SCHEMA)
+    # the calibrated nuisances are in the output, the JSON and every ledger row
+    assert "nuisances calibrated: mesh_damping_ratio" in out1
+    assert set(doc["calibration"]["parameters"]) == {"mesh_damping_ratio", "bearing_n_per_m", "bearing_damping_ratio"}
+    assert all(r["calibration"]["parameters"]["bearing_n_per_m"] > 0 for r in rows)
+
+
+def test_no_calibrate_keeps_the_model_drive_train(rig, capsys, tmp_path):
+    """--no-calibrate (also over [calibration] enabled = true in the model): no calibration in the JSON or the
+    ledger; the model file's drive train is used as is."""
+    model = tmp_path / "m.toml"
+    model.write_text('[drivetrain]\nmesh_damping_ratio = 0.08\n[calibration]\nenabled = true\n')
+    assert main(["compare", str(rig / "rig.csv"), "--model", str(model), "--no-attribution", "--no-calibrate",
+                 "--json", str(tmp_path / "r.json")]) == 0
+    out = capsys.readouterr().out
+    assert "nuisances calibrated" not in out
+    doc = json.loads((tmp_path / "r.json").read_text())
+    assert doc["calibration"] is None
+    rows = read_ledger(tmp_path / "m.ledger.jsonl")
+    assert rows[-1]["calibration"] is None
 
 
 def test_bad_file_gives_one_line_and_exit_2(tmp_path, capsys):

@@ -208,3 +208,63 @@ def test_coloured_noise_snr_and_spectral_slope():
         band = (f > 20) & (f < 2000)
         fitted = np.polyfit(np.log10(f[band]), np.log10(p[band]), 1)[0]
         assert fitted == pytest.approx(slope, abs=0.25)
+
+
+def test_fit_declarations_of_the_builtins_resolve_inside_the_field_bounds():
+    """Every registered effect's fit_parameters resolve (DESIGN.md: the bounds are what the comparison fits
+    within): numeric entries have bounds inside the field's and a log or linear scale, at most one string
+    option; phases are never fitted (amplitude spectra do not see them)."""
+    from dataclasses import fields as dc_fields
+
+    for name in fx.names():
+        cls = fx.get(name)
+        fits, choice = cls.fit_declaration()
+        meta = {f.name: f.metadata for f in dc_fields(cls)}
+        for f in fits:
+            lo, hi = meta[f.name]["bounds"]
+            assert lo <= f.bounds[0] < f.bounds[1] <= hi and f.scale in ("log", "linear"), (name, f)
+            assert meta[f.name]["unit"] != "rad", (name, f)
+        assert choice is None or choice[1] == tuple(meta[choice[0]]["choices"])
+    fits, choice = fx.get("transmission_path").fit_declaration()
+    assert [f.name for f in fits] == ["housing_frequency_hz", "housing_damping_ratio"] and choice is None
+    assert fx.get("hertz_nonlinear").fit_declaration() == ((), None)
+
+
+def test_plugin_fit_declaration_is_read_by_the_comparison_and_bad_ones_are_refused(tmp_path):
+    """A plugin declares its fitted parameters like a built-in (Fit with narrower bounds and a scale); the
+    comparison's fit space takes them as declared. A declaration naming no field, or bounds outside the
+    field's, is refused at registration."""
+    from compare.fitspace import fit_space
+    from datagen.effects.base import Fit
+
+    plugin = tmp_path / "my_wobble.py"
+    plugin.write_text(textwrap.dedent('''
+        from dataclasses import dataclass, field
+        from datagen.effects.base import Effect, Fit, register
+
+        @register
+        @dataclass(frozen=True)
+        class TestWobble(Effect):
+            name = "test_wobble"
+            signature = "sensor gain modulated once per wheel revolution"
+            depth: float = field(default=0.1, metadata={"unit": "-", "bounds": (0.0, 0.9)})
+            rate: float = field(default=1.0, metadata={"unit": "-", "bounds": (0.0, 10.0)})
+            fit_parameters = (Fit("depth", bounds=(0.0, 0.5), scale="linear"),)
+
+            def measurement(self, channels, fs_hz, rng, ctx):
+                return channels
+    '''))
+    assert load_plugin(plugin) == ["test_wobble"]
+    try:
+        space = fit_space(fx.get("test_wobble"))
+        assert [(p.name, p.lo, p.hi, p.log) for p in space.params] == [("depth", 0.0, 0.5, False)]
+    finally:
+        unregister("test_wobble")
+    for bad, match in (((Fit("depht"),), "fit_parameters"), ((Fit("depth", bounds=(0.0, 2.0)),), "bounds")):
+        cls = type("TestBad", (Effect,), {"__annotations__": {"depth": float},
+                                          "depth": field(default=0.1, metadata={"unit": "-", "bounds": (0.0, 0.9)}),
+                                          "name": "test_bad", "signature": "nothing", "fit_parameters": bad,
+                                          "measurement": lambda self, ch, fs, rng, ctx: ch})
+        with pytest.raises(InputError, match=match):
+            register(dataclass(frozen=True)(cls))
+    assert "test_bad" not in fx.names()

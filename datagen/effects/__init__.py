@@ -18,8 +18,8 @@ Importing this package registers the built-in effects.
 from datagen.effects import backlash, noise, transmission_path  # noqa: F401  (register built-ins)
 from datagen.effects import (eccentricity, hertz_nonlinear, pitch_error, profile_error,  # noqa: F401
                              speed_fluctuation, tip_relief, torque_fluctuation)
-from datagen.effects.base import (Effect, EffectContext, EffectSpec, MeshState, build_effects, get, load_plugin,
+from datagen.effects.base import (Effect, EffectContext, EffectSpec, Fit, MeshState, build_effects, get, load_plugin,
                                   names, register)
 
-__all__ = ["Effect", "EffectContext", "EffectSpec", "MeshState", "build_effects", "get", "load_plugin", "names",
+__all__ = ["Effect", "EffectContext", "EffectSpec", "Fit", "MeshState", "build_effects", "get", "load_plugin", "names",
            "register"]

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from datagen.effects.base import Effect, register
+from datagen.effects.base import Effect, Fit, register
 
 
 @register
@@ -33,6 +33,7 @@ class Backlash(Effect):
 
     name = "backlash"
     signature = "at light load/high speed: contact loss -> impacts, broadband rattle, sub/superharmonics of fm"
+    fit_parameters = (Fit("backlash_m", scale="log"),)
     backlash_m: float = field(default=100e-6, metadata={"unit": "m", "bounds": (0.0, 1e-3)})
 
     @classmethod

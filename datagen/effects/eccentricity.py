@@ -55,7 +55,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from datagen.effects.base import Effect, register
+from datagen.effects.base import Effect, Fit, register
 
 
 @dataclass(frozen=True)
@@ -71,6 +71,8 @@ class _Eccentricity(Effect):
     """
 
     gear: ClassVar[str] = ""
+    #: the phase leaves amplitude spectra, envelope and TSA levels unchanged: not fitted
+    fit_parameters = (Fit("amplitude_m", scale="log"),)
     amplitude_m: float = field(default=10e-6, metadata={"unit": "m", "bounds": (0.0, 200e-6)})
     phase_rad: float = field(default=0.0, metadata={"unit": "rad", "bounds": (-math.pi, math.pi)})
 

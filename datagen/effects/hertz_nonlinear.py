@@ -106,6 +106,8 @@ class HertzNonlinear(Effect):
 
     name = "hertz_nonlinear"
     signature = "mean mesh stiffness falls (Ma & Zeng k_h at the mean load): mesh resonance moves down"
+    #: no free parameter: the effect is tried as it is
+    fit_parameters = ()
 
     def mesh_stiffness(self, stiffness, ctx):
         return hertz_nonlinear_stiffness(stiffness, ctx.torque_nm)

@@ -32,6 +32,8 @@ class Noise(Effect):
 
     name = "noise"
     signature = "broadband floor (white: flat; pink/brown: rising towards low frequencies), no orders, no envelope lines"
+    #: measurement chain: matched in every comparison (compare.comparison), never a candidate effect
+    fit_parameters = ()
     snr_db: float = field(default=40.0, metadata={"unit": "dB", "bounds": (-20.0, 120.0)})
     channels: str = field(default="acceleration", metadata={"unit": "-", "choices": ("acceleration", "all")})
     colour: str = field(default="white", metadata={"unit": "-", "choices": ("white", "pink", "brown")})

@@ -76,6 +76,9 @@ class PitchError(Effect):
 
     name = "pitch_error"
     signature = "shaft orders k*fr of the erroneous gear and +/-k*fr sidebands around mesh harmonics"
+    #: the displaced tooth is given in units of the grade's f_pt: grade and single_tooth_factor trade off
+    #: along a valley, so only the grade is fitted (and which gear)
+    fit_parameters = ("grade", "gears")
     grade: float = field(default=6.0, metadata={"unit": "-", "bounds": GRADE_RANGE})
     phase_rad: float = field(default=0.0, metadata={"unit": "rad", "bounds": (-math.pi, math.pi)})
     single_tooth_factor: float = field(default=0.0, metadata={"unit": "-", "bounds": (0.0, 5.0)})

@@ -82,6 +82,7 @@ class ProfileError(Effect):
 
     name = "profile_error"
     signature = "mesh harmonics k*fm rise (same error on every tooth: no shaft-order sidebands)"
+    fit_parameters = ("grade", "cycles", "gears")
     grade: float = field(default=6.0, metadata={"unit": "-", "bounds": GRADE_RANGE})
     cycles: float = field(default=2.0, metadata={"unit": "-", "bounds": (0.0, 10.0)})
     phase_rad: float = field(default=0.0, metadata={"unit": "rad", "bounds": (-math.pi, math.pi)})

@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from datagen.effects.base import Effect, register
+from datagen.effects.base import Effect, Fit, register
 from gearpit.errors import InputError
 
 
@@ -77,6 +77,8 @@ class SpeedFluctuation(Effect):
 
     name = "speed_fluctuation"
     signature = "FM sidebands k*fm +/- j*f_s around mesh harmonics at the fluctuation frequency f_s; k*fm lines drop"
+    #: frequency first: it is seeded from the lines the measurement shows (compare.fitspace.frequency_seeds)
+    fit_parameters = ("frequency_hz", Fit("amplitude_fraction", scale="log"))
     amplitude_fraction: float = field(default=0.01, metadata={"unit": "-", "bounds": (0.0, 0.2)})
     frequency_hz: float = field(default=10.0, metadata={"unit": "Hz", "bounds": (0.0, 1000.0)})
     order: float = field(default=0.0, metadata={"unit": "-", "bounds": (0.0, 50.0)})

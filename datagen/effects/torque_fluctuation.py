@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from datagen.effects.base import Effect, register
+from datagen.effects.base import Effect, Fit, register
 from datagen.effects.speed_fluctuation import check_frequency, modulation
 
 
@@ -55,6 +55,8 @@ class TorqueFluctuation(Effect):
 
     name = "torque_fluctuation"
     signature = "line at the ripple frequency f_t (mesh/bearing force) and +/-f_t sidebands around mesh harmonics"
+    #: frequency first: it is seeded from the lines the measurement shows (compare.fitspace.frequency_seeds)
+    fit_parameters = ("frequency_hz", Fit("amplitude_fraction", scale="log"))
     amplitude_fraction: float = field(default=0.1, metadata={"unit": "-", "bounds": (0.0, 1.0)})
     frequency_hz: float = field(default=10.0, metadata={"unit": "Hz", "bounds": (0.0, 1000.0)})
     order: float = field(default=0.0, metadata={"unit": "-", "bounds": (0.0, 50.0)})

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from datagen.effects.base import Effect, register
+from datagen.effects.base import Effect, Fit, register
 
 #: (bearing force channel, acceleration channel it feeds)
 PATHS = (("force_bearing_pinion_loa_n", "acc_pinion_loa_m_s2"),
@@ -54,6 +54,8 @@ class TransmissionPath(Effect):
 
     name = "transmission_path"
     signature = "amplifies the band around the housing resonance; mesh harmonics and sidebands there grow"
+    #: the housing mass only scales the level, which the sensor-gain fit absorbs: not fitted
+    fit_parameters = (Fit("housing_frequency_hz", scale="log"), Fit("housing_damping_ratio", scale="log"))
     housing_mass_kg: float = field(default=5.0, metadata={"unit": "kg", "bounds": (0.1, 500.0)})
     housing_frequency_hz: float = field(default=3000.0, metadata={"unit": "Hz", "bounds": (50.0, 50000.0)})
     housing_damping_ratio: float = field(default=0.05, metadata={"unit": "-", "bounds": (0.001, 0.5)})

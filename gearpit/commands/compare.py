@@ -17,6 +17,9 @@ def register(sub) -> None:
                    help="Python file registering user effects; recorded in the model; repeatable")
     p.add_argument("--candidates", help="comma-separated effects to try (default: every registered one not in the model)")
     p.add_argument("--no-attribution", action="store_true", help="only compare; do not fit missing effects")
+    p.add_argument("--calibrate", action=argparse.BooleanOptionalAction, default=None,
+                   help="fit the mesh damping, bearing stiffness and bearing damping to the measurement before "
+                        "the attribution (default: as the model's [calibration] enabled says, else off)")
     p.add_argument("--report", type=Path, help="write a self-contained HTML report")
     p.add_argument("--json", type=Path, help="write the JSON document (schema gearpit.compare/1)")
     p.add_argument("--seed", type=int, default=0, help="seed of the noise matched to the measured floor")
@@ -30,7 +33,7 @@ def run(args: argparse.Namespace) -> int:
     cands = [c.strip() for c in args.candidates.split(",") if c.strip()] if args.candidates else None
     out = run_loop(args.measurement, meta=args.meta, model_path=args.model, add=args.add, plugins=args.plugin,
                    attribution=not args.no_attribution, candidates=cands, report=args.report, json_path=args.json,
-                   seed=args.seed)
+                   seed=args.seed, calibrate=args.calibrate)
     c = out.comparison
     for msg in out.messages:
         print(msg)

@@ -8,7 +8,8 @@ Stages (each writes into its own folder under ``--out``):
 4. ``features``: the feature table (incl. HHT) of the demo dataset and the ranking of every feature.
 5. ``models``: the CNN trained on a small dataset of the demo sweep's classes and evaluated on held-out records.
 6. ``compare``: one full model-vs-measurement loop on a "measurement" simulated with a hidden pitch error and
-   nuisance physics unlike the model's: compare, rank the candidate effects, add the claimed one, compare again.
+   nuisance physics unlike the model's: calibrate the model's drive-train nuisances, compare, rank the candidate
+   effects, add the claimed one, compare again.
 
 Later stages are appended to :data:`STAGES` as the pipeline grows.
 """
@@ -125,7 +126,9 @@ def stage_compare(out: Path) -> dict:
     from compare.workflow import hidden_effect_loop
 
     summary, _, _ = hidden_effect_loop(out, "pitch_error")
-    return {k: summary[k] for k in ("hidden", "claimed", "fitted", "error_before_db", "error_after_db")}
+    cal = summary["calibration_before"]
+    return {**{k: summary[k] for k in ("hidden", "claimed", "fitted", "error_before_db", "error_after_db")},
+            "calibrated_nuisances": cal["parameters"] if cal is not None else None}
 
 
 #: (name, function(out_dir) -> JSON-able summary), in pipeline order
