@@ -6,8 +6,24 @@ its bearing transmits; the sensor reads the housing acceleration
 
     A(f) = -w^2 / (k_h - w^2 m_h + i w c_h) * F_bearing(f),  w = 2 pi f,
 
-with ``k_h = m_h (2 pi f_h)^2`` and ``c_h = 2 zeta_h sqrt(k_h m_h)``. Applied
-in the frequency domain over the whole (steady-state) record, i.e. circularly.
+with ``k_h = m_h (2 pi f_h)^2`` and ``c_h = 2 zeta_h sqrt(k_h m_h)``.
+
+A simulated record is a steady state but in general not a whole number of its
+periods, so filtering it circularly (one FFT over the record) joins its end to
+its start: the jump excites the housing mode and rings through the first
+milliseconds (measured on a 1 s stretch of a simulated steady state: 17 % RMS
+error over the first 20 ms at 3 kHz / 5 % damping). Instead the force's mean is
+removed (``A(0) = 0``), a history of ``PRE_ROLL_TAUS`` housing decay times
+``1 / (zeta_h 2 pi f_h)`` is prepended - the stretch of the record that ends
+where the record best repeats its own start - the result is convolved linearly
+(zero-padded FFT, the mode starting at rest) and the history dropped. What remains
+is the mode's response to the mismatch between that history and the true one:
+none for a periodic steady state, whose history is the stretch one period back
+(found in the record itself, :func:`_history`); for a record that does not
+repeat, a transient that decays within a few ``1 / (zeta_h 2 pi f_h)`` (about
+1 ms at 3 kHz / 5 %). A record shorter than three histories is filtered
+circularly, which is exact when it holds a whole number of its periods (e.g.
+whole revolutions) and rings at the start otherwise.
 
 References
 ----------
@@ -27,6 +43,47 @@ PATHS = (("force_bearing_pinion_loa_n", "acc_pinion_loa_m_s2"),
          ("force_bearing_wheel_loa_n", "acc_wheel_loa_m_s2"),
          ("force_bearing_pinion_axial_n", "acc_pinion_axial_m_s2"),
          ("force_bearing_wheel_axial_n", "acc_wheel_axial_m_s2"))
+
+
+#: history prepended before filtering, in housing decay times (e^-20 ~ 2e-9 of a start-up transient left)
+PRE_ROLL_TAUS = 20.0
+
+
+def housing_response(force_n: np.ndarray, fs_hz: float, mass_kg: float, natural_hz: float,
+                     damping_ratio: float) -> np.ndarray:
+    """Housing acceleration (m/s^2) of a steady-state bearing-force record (module docstring)."""
+    x = np.asarray(force_n, dtype=float)
+    n = x.size
+    if n < 2:
+        return np.zeros_like(x)
+    x = x - x.mean()
+    tau_s = 1.0 / (damping_ratio * 2 * np.pi * natural_hz)
+    n_pre = int(np.ceil(PRE_ROLL_TAUS * tau_s * fs_hz))
+    if n < 3 * max(n_pre, 8):      # too short to find its own continuation: circular (exact for whole periods)
+        f = np.fft.rfftfreq(n, 1.0 / fs_hz)
+        return np.fft.irfft(np.fft.rfft(x) * housing_accelerance(f, mass_kg, natural_hz, damping_ratio), n=n)
+    history = _history(x, n_pre)
+    y = np.concatenate([history, x])
+    m = 1 << int(np.ceil(np.log2(y.size + n_pre)))     # zero tail >= the history: no wrap into the record
+    h = housing_accelerance(np.fft.rfftfreq(m, 1.0 / fs_hz), mass_kg, natural_hz, damping_ratio)
+    return np.fft.irfft(np.fft.rfft(y, n=m) * h, n=m)[n_pre:n_pre + n]
+
+
+def _history(x: np.ndarray, n_pre: int) -> np.ndarray:
+    """``n_pre`` samples to put before ``x``: the stretch of ``x`` that ends where ``x`` repeats its own start
+    best (least squares over a window of ``n_pre`` samples, found by FFT cross-correlation): one period back
+    for a periodic steady state. Needs ``x.size >= 3 n_pre``."""
+    n = x.size
+    w = max(n_pre, 8)
+    head = x[:w]
+    m = 1 << int(np.ceil(np.log2(2 * n)))
+    cross = np.fft.irfft(np.fft.rfft(x, m) * np.conj(np.fft.rfft(head, m)), m)[:n - w + 1]   # sum x[j+i] head[i]
+    c2 = np.concatenate([[0.0], np.cumsum(x * x)])
+    energy = c2[w:n + 1] - c2[:n - w + 1]                                                  # sum x[j+i]^2
+    err = energy - 2 * cross + np.dot(head, head)
+    lo = n_pre + 1                                       # a whole history before j, and j clear of 0
+    j = lo + int(np.argmin(err[lo:]))
+    return x[j - n_pre:j]
 
 
 def housing_accelerance(f_hz: np.ndarray, mass_kg: float, natural_hz: float, damping_ratio: float) -> np.ndarray:
@@ -65,8 +122,6 @@ class TransmissionPath(Effect):
         for force_key, acc_key in PATHS:
             if force_key not in channels:
                 continue
-            x = channels[force_key]
-            h = housing_accelerance(np.fft.rfftfreq(len(x), 1.0 / fs_hz), self.housing_mass_kg,
-                                    self.housing_frequency_hz, self.housing_damping_ratio)
-            out[acc_key] = np.fft.irfft(np.fft.rfft(x) * h, n=len(x))
+            out[acc_key] = housing_response(channels[force_key], fs_hz, self.housing_mass_kg,
+                                            self.housing_frequency_hz, self.housing_damping_ratio)
         return out
