@@ -41,7 +41,12 @@ def results_tables(res: dict) -> str:
     choice = ind["cnn_choice"] if ind else "tsa"
     if ind:
         out += ["### Headline: every protocol, the CNN and the best baseline", "", HEAD]
-        out += _protocol_rows(ind, choice, "in-domain (default)")
+        out += _protocol_rows(ind, choice, "in-domain (default: many rigs)")
+        if "rig" in res:
+            rg = res["rig"]
+            out += _protocol_rows(rg, rg["cnn_choice"], "in-domain (one rig)")
+            for split, r in rg.get("cross_condition", {}).items():
+                out += _protocol_rows(r, rg["cnn_choice"], f"cross-condition, one rig ({split}: {r['rule']})")
         if "randomised" in res:
             rr = res["randomised"]
             ch = choice if choice in rr["cnn"] else rr["cnn_choice"]
@@ -114,6 +119,17 @@ def results_tables(res: dict) -> str:
         out += [f"### Cross-physics ({r['rule']}; {r['n_train']} train, {r['n_test']} test)", "", HEAD]
         out += [_row(f"CNN {rep}", v["test"]) for rep, v in r["cnn"].items()]
         out += [_row(kind, r["baselines"][kind]["test"]) for kind in KINDS] + [""]
+    if "rig" in res:
+        r = res["rig"]
+        out += [f"### One rig (rig.toml): in-domain ({r['n_train']} train, {r['n_test']} test; variant chosen on "
+                f"the validation split: **{r['cnn_choice']}**)", "", HEAD]
+        out += [_row(f"CNN {rep}", v["test"]) for rep, v in r["cnn"].items()]
+        out += [_row(kind, r["baselines"][kind]["test"]) for kind in KINDS] + [""]
+        for split, c in r.get("cross_condition", {}).items():
+            out += [f"### One rig, cross-condition: {split} ({c['rule']}; {c['n_train']} train, {c['n_test']} test)",
+                    "", HEAD]
+            out += [_row(f"CNN {rep}", v["test"]) for rep, v in c["cnn"].items()]
+            out += [_row(kind, c["baselines"][kind]["test"]) for kind in KINDS] + [""]
     if "randomised" in res:
         r = res["randomised"]
         out += [f"### In-domain on the randomised sweep ({r['n_train']} train, {r['n_test']} test)", "", HEAD]

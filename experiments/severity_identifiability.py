@@ -14,7 +14,8 @@ own stiffness). Per pitted tooth ``m`` (engagement ``m`` of the pinion):
   mean healthy mesh stiffness (a tooth whose pair lost all stiffness for one whole mesh cycle: 1);
 - ``peak``: the largest drop of the total mesh stiffness, as a fraction of the mean;
 - ``te_um``: the largest change of the static transmission error ``F / k`` it causes at the record's load
-  (F = torque / pinion base radius), micrometres.
+  (F = torque / pinion base radius), micrometres; divided by the torque it is the pit's *peak* excitation
+  per unit load, which (unlike the deficit, an integral over the mesh) a reader of the impulse height sees.
 
 The record's stiffness-level severity is the worst tooth's value (the label is the worst tooth's area).
 Questions answered:
@@ -267,7 +268,9 @@ def main(argv=None) -> int:
         ranges[c] = (float(q[1]), float(q[3]))
         res[f"deficit_worst_{c}"] = {"min": q[0], "p5": q[1], "median": q[2], "p95": q[3], "max": q[4],
                                      "area_range": [float(s["severity"].min()), float(s["severity"].max())]}
-    for col in ("deficit_worst", "peak_worst", "deficit_of_largest_area_tooth"):
+    # the peak static transmission-error change per unit load: what a reader of the pit's peak sees (te ~ F)
+    t["te_pit_um_per_nm"] = t["te_pit_um"] / t["torque_nm"]
+    for col in ("deficit_worst", "peak_worst", "deficit_of_largest_area_tooth", "te_pit_um_per_nm"):
         acc, cuts = best_ordered_thresholds(t[col].to_numpy(), y)
         res[f"best_thresholds_{col}"] = {"accuracy": acc, "cuts": cuts}
     res["largest_area_tooth_is_largest_deficit_tooth"] = float(np.mean(
