@@ -70,7 +70,7 @@ import numpy as np
 from compare.comparison import Reference, evaluate, prepare_reference, simulate_model
 from compare.error import effective_count
 from compare.fitspace import CHAIN_EFFECTS, fit_space
-from compare.search import Search, Trial, quadratic, round_a, round_b, round_c, round_d
+from compare.search import Search, Trial, line_sigma_u, quadratic, round_a, round_b, round_c, round_d
 from gearpit.errors import GearpitError, require
 
 
@@ -319,8 +319,7 @@ def _refine_nuisances(results: list, ref: Reference, model, calibration, setting
         if cal.error_db < c.error_db:
             c.params = {**c.params, **cal.effect_params}
             c.error_db, c.view_error_db = cal.error_db, dict(cal.view_error_db)
-            c.explains = [d.key for d in disagreements if (i := _matching_location(ref.plan, d)) is not None
-                          and abs(cal.residual_db[i]) <= 0.5 * abs(d.residual_db)]
+            c.explains = _explained(ref, cal.residual_db, disagreements)
     return n
 
 
@@ -349,13 +348,18 @@ def _result(s: Search, base, ref: Reference, n_eff: float, disagreements) -> Can
             su = _conditional_sigma_u(s, j, best, n_eff)
         sg = p.sigma_from_u(params[p.name], su)
         sigma[p.name] = sg if sg <= p.hi - p.lo else math.inf  # wider than the bounds: not identifiable
-    explains = []
+    return CandidateResult(s.space.effect, sig, params, sigma, best.error_db, base.total_db, best.view_error_db,
+                           _window(ref), len(s.trials), _explained(ref, best.residual_db, disagreements))
+
+
+def _explained(ref: Reference, residual_db: np.ndarray, disagreements) -> list:
+    """Keys of the disagreements that a model with these residuals at least halves (in dB)."""
+    out = []
     for d in disagreements:
         i = _matching_location(ref.plan, d)
-        if i is not None and abs(best.residual_db[i]) <= 0.5 * abs(d.residual_db):
-            explains.append(d.key)
-    return CandidateResult(s.space.effect, sig, params, sigma, best.error_db, base.total_db, best.view_error_db,
-                           _window(ref), len(s.trials), explains)
+        if i is not None and abs(residual_db[i]) <= 0.5 * abs(d.residual_db):
+            out.append(d.key)
+    return out
 
 
 def _conditional_sigma_u(s: Search, j: int, best: Trial, n_eff: float) -> float:
@@ -364,13 +368,7 @@ def _conditional_sigma_u(s: Search, j: int, best: Trial, n_eff: float) -> float:
     Smaller than the profile value when parameters trade off."""
     line = [t for t in s.trials if math.isfinite(t.error_db) and t.choice == best.choice
             and np.allclose(np.delete(t.u, j), np.delete(best.u, j), atol=1e-6)]
-    line.sort(key=lambda t: abs(t.u[j] - best.u[j]))
-    line = line[:5]
-    if len({round(float(t.u[j]), 9) for t in line}) < 3:
-        return math.inf
-    u = np.array([t.u[j] - best.u[j] for t in line])
-    a2 = np.polyfit(u, [t.error_db ** 2 for t in line], 2)[0]
-    return math.sqrt(best.error_db ** 2 / (n_eff * 2 * a2)) if a2 > 0 else math.inf
+    return line_sigma_u([t.u[j] - best.u[j] for t in line], [t.error_db for t in line], best.error_db, n_eff)
 
 
 def _matching_location(plan, d) -> int | None:

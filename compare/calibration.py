@@ -369,7 +369,7 @@ def _evaluate(ref, model, params, pts, extra_effects, seed, solver, counter, vie
         if free is not None:
             mine = {k: vals.pop(k) for k in list(vals) if k in free.params()}
             extra = extra[:-1] + (replace(free, **mine),)
-        mm = with_drivetrain(model, vals)
+        mm = model.with_drivetrain(vals)
         cases.append(mm.case(m.pair, speed_rpm=ref.speed.speed_rpm, torque_nm=m.torque_nm, duration_s=dur,
                              fs_hz=m.fs_hz, seed=seed, extra_effects=extra, solver=solver))
     try:
@@ -397,29 +397,17 @@ def _evaluate(ref, model, params, pts, extra_effects, seed, solver, counter, vie
 
 def _sigma(ref, params, values, scans, best, views) -> dict:
     """Conditional 1-sigma of each nuisance (the others held): curvature of E^2 along its last scan."""
-    from compare.error import location_weights
+    from compare.error import effective_count
+    from compare.search import line_sigma_u
 
-    u = np.array([VIEW_WEIGHTS[loc.view] if loc.view in views else 0.0 for loc in ref.plan.locations])
-    u = u * location_weights(ref.plan)
-    n_eff = float(u.sum() ** 2 / np.sum(u * u))     # Kish's effective count over the calibration's views
+    n_eff = effective_count(ref.plan, views)     # Kish's effective count over the calibration's views
     out = {}
     for j, p in enumerate(params):
-        line = sorted((q for q in scans[j] if math.isfinite(q.error_db)) if scans else [],
-                      key=lambda q: abs(q.u[j] - best.u[j]))[:5]
-        su = math.inf
-        if len({round(float(q.u[j]), 9) for q in line}) >= 3:
-            a2 = np.polyfit([q.u[j] - best.u[j] for q in line], [q.error_db ** 2 for q in line], 2)[0]
-            if a2 > 0:
-                su = math.sqrt(best.error_db ** 2 / (n_eff * 2 * a2))
+        line = [q for q in scans[j] if math.isfinite(q.error_db)] if scans else []
+        su = line_sigma_u([q.u[j] - best.u[j] for q in line], [q.error_db for q in line], best.error_db, n_eff)
         sg = p.sigma_from_u(values[p.name], su)
         out[p.name] = sg if sg <= p.hi - p.lo else math.inf
     return out
-
-
-def with_drivetrain(model, values: dict):
-    """``model`` with ``values`` in its ``[drivetrain]`` table
-    (:meth:`compare.model.ComparisonModel.with_drivetrain`)."""
-    return model.with_drivetrain(values)
 
 
 def calibrated_compare(measurement, model, *, reference=None, seed: int = 0, calibrate_nuisances: bool | None = None,

@@ -79,9 +79,11 @@ def location_weights(plan: Plan) -> np.ndarray:
     return w
 
 
-def effective_count(plan: Plan) -> float:
-    """Kish's effective number of residuals, ``(sum u)^2 / sum u^2`` with ``u_i = W_v w_i``."""
-    u = location_weights(plan) * np.array([VIEW_WEIGHTS[loc.view] for loc in plan.locations])
+def effective_count(plan: Plan, views=None) -> float:
+    """Kish's effective number of residuals, ``(sum u)^2 / sum u^2`` with ``u_i = W_v w_i``; with ``views``,
+    over the residuals of those views only."""
+    u = location_weights(plan) * np.array([VIEW_WEIGHTS[loc.view] if views is None or loc.view in views else 0.0
+                                           for loc in plan.locations])
     return float(u.sum() ** 2 / np.sum(u * u))
 
 

@@ -82,12 +82,12 @@ class FitSpace:
 def fit_space(effect_cls) -> FitSpace:
     """The :class:`FitSpace` of a registered effect class (its :meth:`~datagen.effects.base.Effect.fit_declaration`)."""
     fits, choice = effect_cls.fit_declaration()
-    defaults = effect_cls().params()
+    probe = effect_cls()
+    defaults = probe.params()
     units = {f.name: f.metadata.get("unit", "-") for f in fields(effect_cls)}
     params = tuple(FitParameter(f.name, f.bounds[0], f.bounds[1], units[f.name],
                                 float(min(max(defaults[f.name], f.bounds[0]), f.bounds[1])), f.scale == "log")
                    for f in fits)
-    probe = effect_cls()
     return FitSpace(effect_cls.name, params, choice, bool(probe.is_nonlinear or probe.is_nonstationary))
 
 

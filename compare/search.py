@@ -184,3 +184,14 @@ def round_d(s: Search) -> list[Trial]:
     u = q[0]
     t = s.point({p.name: float(p.from_u(u[j])) for j, p in enumerate(s.space.params)}, s.best.choice)
     return [] if s.seen(t) else [t]
+
+
+def line_sigma_u(offsets_u, error_db, best_error_db: float, n_eff: float) -> float:
+    """1-sigma in the search coordinate of one parameter with the others held: the curvature of ``E^2`` of a
+    parabola through the (at most 5) points nearest the best along that line, ``offsets_u`` from the best,
+    ``sigma_u^2 = E_min^2 / (N 2a)``; ``inf`` with fewer than 3 distinct points or no positive curvature."""
+    pts = sorted(zip((float(d) for d in offsets_u), (float(e) for e in error_db)), key=lambda t: abs(t[0]))[:5]
+    if len({round(d, 9) for d, _ in pts}) < 3:
+        return math.inf
+    a2 = np.polyfit([d for d, _ in pts], [e ** 2 for _, e in pts], 2)[0]
+    return math.sqrt(best_error_db ** 2 / (n_eff * 2 * a2)) if a2 > 0 else math.inf

@@ -91,12 +91,12 @@ How to write an effect
 
        fit_parameters = (Fit("amplitude_m", scale="log"),)      # phase: amplitude spectra do not see it
 
-   Without a declaration (``None``) the first :data:`MAX_FIT` numeric fields
+   Without a declaration (``None``) the first :data:`datagen.effects.fit.MAX_FIT` numeric fields
    whose unit is not ``rad`` and the first string option are fitted (phases
    leave amplitude spectra, envelope and TSA levels unchanged).
    :meth:`Effect.fit_declaration` resolves either form; ``"auto"`` scale is
    log when the bounds are positive and span more than a factor
-   :data:`LOG_SPAN`, or run from 0 to at most 1 (SI magnitudes, fractions:
+   :data:`datagen.effects.fit.LOG_SPAN`, or run from 0 to at most 1 (SI magnitudes, fractions:
    0 means "off"), else linear (a grade, a count).
 7. A user's own effect in their own file: ``load_plugin("my_effects.py")``
    (or ``gearpit simulate case.toml --plugin my_effects.py``) imports the file,
@@ -113,12 +113,13 @@ import dataclasses
 import importlib.util
 import math
 import sys
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any, ClassVar
 
 import numpy as np
 
+from datagen.effects.fit import Fit, resolve_fit
 from gearpit.errors import InputError
 
 #: the contribution points, in simulation order (method names on :class:`Effect`)
@@ -194,38 +195,6 @@ class MeshState:
         return MeshState(*(getattr(self, f.name)[idx] for f in fields(self)))
 
 
-#: scales of a fitted parameter (:class:`Fit`)
-FIT_SCALES = ("auto", "log", "linear")
-#: fitted numeric parameters when an effect declares none
-MAX_FIT = 2
-#: bounds spanning more than this factor are searched on a log scale ("auto")
-LOG_SPAN = 30.0
-
-
-@dataclass(frozen=True)
-class Fit:
-    """One parameter the comparison fits (entry of :attr:`Effect.fit_parameters`).
-
-    Parameters
-    ----------
-    name : str
-        Field name of the effect.
-    bounds : (float, float) or None
-        Search interval (field units), inside the field's bounds; None: the field's bounds.
-    scale : {"auto", "log", "linear"}
-        Search coordinate; ``"auto"`` resolves as described in the module docstring. A log scale whose lower
-        bound is 0 searches from ``hi / 1000``.
-    """
-
-    name: str
-    bounds: tuple | None = None
-    scale: str = "auto"
-
-    def __post_init__(self):
-        if self.scale not in FIT_SCALES:
-            raise InputError(f"fit parameter {self.name}.scale", self.scale, f"one of: {', '.join(FIT_SCALES)}")
-
-
 @dataclass(frozen=True)
 class Effect:
     """Base class of all effects (see the module docstring for how to write one).
@@ -279,37 +248,7 @@ class Effect:
         Raises :class:`InputError` for an entry that names no field, a numeric entry with bounds outside the
         field's, or more than one string option.
         """
-        by_name = {f.name: f for f in fields(cls)}
-        declared = cls.fit_parameters
-        if declared is None:
-            numeric = [f.name for f in fields(cls) if "bounds" in f.metadata and f.metadata.get("unit") != "rad"]
-            choice = next((f.name for f in fields(cls) if "choices" in f.metadata), None)
-            declared = tuple(numeric[:MAX_FIT]) + ((choice,) if choice else ())
-        where = f"effect {cls.name}.fit_parameters"
-        if not isinstance(declared, (tuple, list)):
-            raise InputError(where, declared, "a tuple of field names or Fit entries")
-        numeric_fits, choices = [], []
-        for item in declared:
-            fit = Fit(item) if isinstance(item, str) else item
-            if not isinstance(fit, Fit) or fit.name not in by_name:
-                raise InputError(where, item, f"a field name or Fit of a field: {', '.join(by_name) or '(none)'}")
-            meta = by_name[fit.name].metadata
-            if "choices" in meta:
-                choices.append((fit.name, tuple(meta["choices"])))
-                continue
-            flo, fhi = (float(v) for v in meta["bounds"])
-            lo, hi = (flo, fhi) if fit.bounds is None else (float(fit.bounds[0]), float(fit.bounds[1]))
-            if not (flo <= lo < hi <= fhi):
-                raise InputError(f"{where}.{fit.name}.bounds", fit.bounds, f"lo < hi inside the field's [{flo}, {fhi}]")
-            scale = fit.scale
-            if scale == "auto":
-                scale = "log" if (lo > 0 and hi / lo > LOG_SPAN) or (lo == 0 and 0 < hi <= 1.0) else "linear"
-            if scale == "log" and hi <= 0:
-                raise InputError(f"{where}.{fit.name}.scale", "log", "a positive upper bound for a log scale")
-            numeric_fits.append(Fit(fit.name, (lo, hi), scale))
-        if len(choices) > 1:
-            raise InputError(where, [c[0] for c in choices], "at most one string option")
-        return tuple(numeric_fits), (choices[0] if choices else None)
+        return resolve_fit(cls)
 
     def params(self) -> dict:
         """The parameters as a plain dict (SI, as in the field names)."""
