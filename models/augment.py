@@ -11,7 +11,43 @@ For each record of a batch, drawn independently from the given generator:
   uniform in ``+/- speed_error`` (applied by the representation, see
   :mod:`models.representations`);
 - **polarity**: with probability ``polarity_flip_probability`` the record is
-  negated (an accelerometer mounted the other way round).
+  negated (an accelerometer mounted the other way round);
+- **transmission path** (off by default, ``path_probability`` = 0): with
+  probability ``path_probability`` the record passes through ``path_modes``
+  random mounting resonances in series, each the absolute transmissibility of a
+  base-excited single-degree-of-freedom oscillator (an accelerometer on a stud,
+  magnet or bracket; Ewins [1]_, Harris [2]_)
+
+      T(f) = (1 + 2 i zeta r) / (1 - r^2 + 2 i zeta r),   r = f / f_n,
+
+  unit gain well below ``f_n``, ``sqrt(1 + 4 zeta^2) / (2 zeta)`` at ``f_n``,
+  falling as ``2 zeta / r`` above. ``f_n`` is drawn uniformly in ``path_hz_range``
+  (upper end clipped to 0.45 fs; an error if the lower end is above it) and
+  ``zeta`` log-uniformly in ``path_damping_range``. The filtered record is scaled
+  back to its own RMS (the gain draw stays the only level change, and a model
+  reading the record level keeps the level it was given). Why: a housing or
+  mounting resonance sits at a fixed *frequency*, so when the speed changes it
+  moves in the *order* domain of the TSA and order representations; a network
+  trained at low speeds sees it at other orders than a test at high speeds.
+  Random resonances teach the network to ignore where the colouring sits.
+
+Order of application: path filter, then gain and polarity, then noise (sensor
+noise comes after the mount); the random *start* and the *speed error* are
+applied by the representation. :func:`augment_batch` works on the time records
+and :func:`models.train.train_cnn` calls it before the representation
+(``represent``), so the TSA, the order spectra and the raw segment all see the
+filtered record. The path draws come from the same generator *after* every
+other draw and only when ``path_probability > 0``: with the path off, a given
+seed gives the same batch as before the path existed.
+
+The path filter (:func:`path_filter`) is a linear convolution by FFT of the
+record with a history prepended, so that the mode does not start at rest at
+the record's start: the history is the record's start mirrored (odd reflection,
+continuous in value and slope), ``PATH_PRE_ROLL_TAUS`` decay times
+``1 / (2 pi zeta f_n)`` long (capped at the record length), and the zero-padded
+tail is longer than the history, so nothing wraps round. What remains is the
+mode's response to the difference between the mirrored and the true history,
+which decays within a few decay times (<= 8 ms at 1 kHz / 2 %).
 
 Per-signal normalisation in the representation removes the gain again for the
 network; the gain still matters for the noise level and is kept so that
@@ -21,6 +57,14 @@ The defaults are deliberately light (noise in a quarter of the records at
 20-40 dB, speed error 0.2 %). Measured on the default dataset (CNN, tsa input,
 experiments/RESULTS.md): light 82 % severity / 93 % teeth accuracy; none 77 % /
 84 %; heavier (5-30 dB noise in half the records, 1 % speed error) 80 % / 81 %.
+
+References
+----------
+.. [1] Ewins, D. J. (2000). Modal Testing: Theory, Practice and Application, 2nd ed.,
+   Research Studies Press, sec. 2.2 (SDOF frequency response functions).
+.. [2] Harris, C. M., Piersol, A. G. (2002). Harris' Shock and Vibration Handbook,
+   5th ed., McGraw-Hill, ch. 2 (transmissibility of a base-excited SDOF system)
+   and ch. 15 (accelerometer mounting resonance).
 """
 from __future__ import annotations
 
@@ -29,6 +73,11 @@ from dataclasses import asdict, dataclass, fields
 import numpy as np
 
 from gearpit.errors import InputError, require, require_range
+
+#: history prepended by :func:`path_filter`, in decay times of the mode (e^-20 ~ 2e-9)
+PATH_PRE_ROLL_TAUS = 20.0
+#: highest resonance frequency drawn, as a fraction of the sampling rate
+PATH_MAX_FS_FRACTION = 0.45
 
 
 @dataclass(frozen=True)
@@ -41,6 +90,10 @@ class AugmentConfig:
     snr_db_range: tuple[float, float] = (20.0, 40.0)
     speed_error: float = 0.002
     polarity_flip_probability: float = 0.5
+    path_probability: float = 0.0
+    path_hz_range: tuple[float, float] = (1000.0, 6000.0)
+    path_damping_range: tuple[float, float] = (0.02, 0.10)
+    path_modes: int = 1
 
     def __post_init__(self):
         require(isinstance(self.random_start, bool), "augment.random_start", self.random_start, "true or false")
@@ -52,6 +105,17 @@ class AugmentConfig:
         object.__setattr__(self, "snr_db_range", (float(r[0]), float(r[1])))
         require_range("augment.speed_error", self.speed_error, 0.0, 0.2)
         require_range("augment.polarity_flip_probability", self.polarity_flip_probability, 0.0, 1.0)
+        require_range("augment.path_probability", self.path_probability, 0.0, 1.0)
+        for name, lo, hi, what in (("path_hz_range", 1.0, 1e6, "Hz"), ("path_damping_range", 1e-3, 0.5, "")):
+            r = getattr(self, name)
+            ok = (isinstance(r, (tuple, list)) and len(r) == 2
+                  and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in r))
+            ok = ok and lo <= float(r[0]) <= float(r[1]) <= hi
+            require(ok, f"augment.{name}", r, f"(lo, hi) with {lo:g} <= lo <= hi <= {hi:g}" + (f" ({what})" if what else ""))
+            object.__setattr__(self, name, (float(r[0]), float(r[1])))
+        m = self.path_modes
+        require(isinstance(m, (int, np.integer)) and not isinstance(m, bool) and 1 <= m <= 3, "augment.path_modes", m,
+                "an integer in [1, 3] (resonances in series)")
 
     @classmethod
     def none(cls) -> "AugmentConfig":
@@ -70,12 +134,55 @@ class AugmentConfig:
     def to_dict(self) -> dict:
         d = asdict(self)
         d["snr_db_range"] = list(self.snr_db_range)
+        d["path_hz_range"] = list(self.path_hz_range)
+        d["path_damping_range"] = list(self.path_damping_range)
         return d
 
 
-def augment_batch(x: np.ndarray, config: AugmentConfig, rng: np.random.Generator
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def mount_transmissibility(f_hz, natural_hz: float, damping_ratio: float) -> np.ndarray:
+    """Absolute transmissibility ``T(f)`` of a base-excited SDOF oscillator (complex; module docstring).
+    Arguments broadcast against each other."""
+    r = np.asarray(f_hz, dtype=float) / np.asarray(natural_hz, dtype=float)
+    c = 2j * np.asarray(damping_ratio, dtype=float) * r
+    return (1.0 + c) / (1.0 - r * r + c)
+
+
+def path_filter(x: np.ndarray, fs_hz: float, natural_hz, damping_ratio) -> np.ndarray:
+    """Records ``x`` (n, n_samples) through SDOF mounting resonances in series.
+
+    ``natural_hz`` and ``damping_ratio``: scalars (one mode for every record) or arrays (n, modes).
+    The history and the zero padding are described in the module docstring; no RMS rescaling here.
+    """
+    a = np.atleast_2d(np.asarray(x, dtype=np.float64))
+    n, ns = a.shape
+    fn = np.asarray(natural_hz, dtype=float)
+    ze = np.asarray(damping_ratio, dtype=float)
+    fn = np.full((n, 1), float(fn)) if fn.ndim == 0 else fn
+    ze = np.full(fn.shape, float(ze)) if ze.ndim == 0 else ze
+    require(fn.ndim == 2 and fn.shape[0] == n and ze.shape == fn.shape, "natural_hz", fn.shape,
+            f"scalars or two arrays of shape ({n}, modes)")
+    require(bool(np.all((fn > 0) & (fn < fs_hz / 2))), "natural_hz", float(fn.max()),
+            f"resonance frequencies in (0, {fs_hz / 2:g}) Hz (below Nyquist)")
+    require(bool(np.all(ze > 0)), "damping_ratio", float(ze.min()), "damping ratios > 0")
+    tau_s = 1.0 / (2 * np.pi * float(np.min(ze * fn)))
+    n_pre = int(min(ns - 1, np.ceil(PATH_PRE_ROLL_TAUS * tau_s * fs_hz)))
+    pre = 2.0 * a[:, :1] - a[:, n_pre:0:-1]                                 # odd reflection of the start
+    y = np.concatenate([pre, a], axis=1)
+    m = 1 << int(np.ceil(np.log2(y.shape[1] + n_pre + 1)))                  # zero tail > history: no wrap
+    f = np.fft.rfftfreq(m, 1.0 / fs_hz)[None, :]
+    h = np.ones((n, f.size), dtype=complex)
+    for j in range(fn.shape[1]):
+        h *= mount_transmissibility(f, fn[:, j:j + 1], ze[:, j:j + 1])
+    return np.fft.irfft(np.fft.rfft(y, n=m, axis=1) * h, n=m, axis=1)[:, n_pre:n_pre + ns]
+
+
+def augment_batch(x: np.ndarray, config: AugmentConfig, rng: np.random.Generator, *, fs_hz: float | None = None,
+                  info: dict | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Augmented copy of the records ``x`` (n, n_samples), segment starts and speed factors.
+
+    ``fs_hz`` (the records' sampling rate) is needed when ``config.path_probability > 0``.
+    ``info``, if given, receives the path draws: ``path_applied`` (n,) bool, ``path_hz`` and
+    ``path_damping`` (n, path_modes) (drawn for every record, used where applied), ``path_rms_scale`` (n,).
 
     Returns
     -------
@@ -86,15 +193,42 @@ def augment_batch(x: np.ndarray, config: AugmentConfig, rng: np.random.Generator
     """
     a = np.asarray(x, dtype=np.float64)
     n = a.shape[0]
+    # draws in the order they had before the path existed (same seed, same batch with the path off)
     starts = rng.uniform(0.0, 1.0, n) if config.random_start else np.zeros(n)
     gain = 10.0 ** (rng.uniform(-config.gain_db, config.gain_db, n) / 20.0)
     sign = np.where(rng.uniform(size=n) < config.polarity_flip_probability, -1.0, 1.0)
-    out = a * (gain * sign)[:, None]
     noisy = rng.uniform(size=n) < config.noise_probability
     snr = rng.uniform(config.snr_db_range[0], config.snr_db_range[1], n)
-    if noisy.any():
+    white = rng.standard_normal((int(noisy.sum()), a.shape[1])) if noisy.any() else None
+    speed = 1.0 + rng.uniform(-config.speed_error, config.speed_error, n)
+    if config.path_probability > 0:
+        require(fs_hz is not None and float(fs_hz) > 0, "fs_hz", fs_hz,
+                "the sampling rate (augmentation with a transmission path)")
+        fs = float(fs_hz)
+        lo, hi = config.path_hz_range
+        hi = min(hi, PATH_MAX_FS_FRACTION * fs)
+        require(lo <= hi, "augment.path_hz_range", config.path_hz_range,
+                f"a lower end <= {PATH_MAX_FS_FRACTION:g} fs = {PATH_MAX_FS_FRACTION * fs:g} Hz at fs {fs:g} Hz")
+        applied = rng.uniform(size=n) < config.path_probability
+        k = config.path_modes
+        f_draw = rng.uniform(lo, hi, (n, k))
+        z_lo, z_hi = np.log(config.path_damping_range)
+        z_draw = np.exp(rng.uniform(z_lo, z_hi, (n, k)))
+        scale = np.ones(n)
+        if applied.any():
+            src = a[applied]
+            filt = path_filter(src, fs, f_draw[applied], z_draw[applied])
+            r_in = np.std(src, axis=1)
+            r_out = np.std(filt, axis=1)
+            s_ = np.where(r_out > 0, r_in / np.where(r_out > 0, r_out, 1.0), 1.0)
+            scale[applied] = s_
+            a = a.copy()
+            a[applied] = filt * s_[:, None]
+        if info is not None:
+            info.update(path_applied=applied, path_hz=f_draw, path_damping=z_draw, path_rms_scale=scale)
+    out = a * (gain * sign)[:, None]
+    if white is not None:
         power = np.mean(out[noisy] ** 2, axis=1)
         std = np.sqrt(power / 10.0 ** (snr[noisy] / 10.0))
-        out[noisy] += std[:, None] * rng.standard_normal((int(noisy.sum()), a.shape[1]))
-    speed = 1.0 + rng.uniform(-config.speed_error, config.speed_error, n)
+        out[noisy] += std[:, None] * white
     return out.astype(np.float32), starts, speed

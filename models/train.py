@@ -238,7 +238,7 @@ def train_cnn(data: SignalSet, config: TrainConfig = TrainConfig(), *, log=None)
                 b = order[i0:i0 + config.batch_size]
                 if b.size < 2:  # batch normalisation needs two records
                     continue
-                xb, starts, speed = augment_batch(data.signals[b], config.augment, rng)
+                xb, starts, speed = augment_batch(data.signals[b], config.augment, rng, fs_hz=data.fs_hz)
                 x = torch.from_numpy(represent(xb, rep, fs_hz=data.fs_hz, shaft_hz=None if fr is None else fr[b],
                                                mesh_cps=None if mc is None else mc[b], z_pinion=z, starts=starts,
                                                speed_factors=speed))
