@@ -29,16 +29,27 @@ For each record of a batch, drawn independently from the given generator:
   mounting resonance sits at a fixed *frequency*, so when the speed changes it
   moves in the *order* domain of the TSA and order representations; a network
   trained at low speeds sees it at other orders than a test at high speeds.
-  Random resonances teach the network to ignore where the colouring sits.
+  Random resonances teach the network to ignore where the colouring sits;
+- **bandwidth** (off by default, ``lowpass_probability`` = 0): with probability
+  ``lowpass_probability`` the record is low-passed at a cut-off drawn uniformly
+  in ``lowpass_fs_fraction_range`` times the sampling rate: a Butterworth filter
+  of order ``LOWPASS_ORDER`` run forwards and backwards (zero phase, so the TSA
+  waveform does not shift; digital Butterworth, so the gain is
+  ``1 / (1 + (tan(pi f / fs) / tan(pi f_c / fs))^(2 LOWPASS_ORDER))``, 1/2 at
+  ``f_c``), then scaled back to the record's RMS. Physically an acquisition chain
+  with a lower bandwidth (anti-alias filter, sensor); in the *order* domain it is
+  what a higher speed does to the TSA: orders above ``fs / 2 / f_shaft`` are
+  absent, so at 1800 rpm the TSA ends at order 213 while at 600 rpm it reaches
+  order 512. A network trained at low speeds never saw that cut.
 
-Order of application: path filter, then gain and polarity, then noise (sensor
+Order of application: path filter, bandwidth, then gain and polarity, then noise (sensor
 noise comes after the mount); the random *start* and the *speed error* are
 applied by the representation. :func:`augment_batch` works on the time records
 and :func:`models.train.train_cnn` calls it before the representation
 (``represent``), so the TSA, the order spectra and the raw segment all see the
-filtered record. The path draws come from the same generator *after* every
-other draw and only when ``path_probability > 0``: with the path off, a given
-seed gives the same batch as before the path existed.
+filtered record. The path and bandwidth draws come from the same generator
+*after* every other draw (path first) and only when their probability is > 0:
+with both off, a given seed gives the same batch as before they existed.
 
 The path filter (:func:`path_filter`) is a linear convolution by FFT of the
 record with a history prepended, so that the mode does not start at rest at
@@ -72,12 +83,16 @@ from dataclasses import asdict, dataclass, fields
 
 import numpy as np
 
+from scipy.signal import butter, sosfiltfilt
+
 from gearpit.errors import InputError, require, require_range
 
 #: history prepended by :func:`path_filter`, in decay times of the mode (e^-20 ~ 2e-9)
 PATH_PRE_ROLL_TAUS = 20.0
 #: highest resonance frequency drawn, as a fraction of the sampling rate
 PATH_MAX_FS_FRACTION = 0.45
+#: Butterworth order of the bandwidth augmentation (run forwards and backwards)
+LOWPASS_ORDER = 8
 
 
 @dataclass(frozen=True)
@@ -94,6 +109,8 @@ class AugmentConfig:
     path_hz_range: tuple[float, float] = (1000.0, 6000.0)
     path_damping_range: tuple[float, float] = (0.02, 0.10)
     path_modes: int = 1
+    lowpass_probability: float = 0.0
+    lowpass_fs_fraction_range: tuple[float, float] = (0.15, 0.45)
 
     def __post_init__(self):
         require(isinstance(self.random_start, bool), "augment.random_start", self.random_start, "true or false")
@@ -113,6 +130,13 @@ class AugmentConfig:
             ok = ok and lo <= float(r[0]) <= float(r[1]) <= hi
             require(ok, f"augment.{name}", r, f"(lo, hi) with {lo:g} <= lo <= hi <= {hi:g}" + (f" ({what})" if what else ""))
             object.__setattr__(self, name, (float(r[0]), float(r[1])))
+        require_range("augment.lowpass_probability", self.lowpass_probability, 0.0, 1.0)
+        r = self.lowpass_fs_fraction_range
+        ok = (isinstance(r, (tuple, list)) and len(r) == 2
+              and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in r))
+        require(ok and 0.01 <= float(r[0]) <= float(r[1]) < 0.5, "augment.lowpass_fs_fraction_range", r,
+                "(lo, hi) with 0.01 <= lo <= hi < 0.5 (cut-off over sampling rate)")
+        object.__setattr__(self, "lowpass_fs_fraction_range", (float(r[0]), float(r[1])))
         m = self.path_modes
         require(isinstance(m, (int, np.integer)) and not isinstance(m, bool) and 1 <= m <= 3, "augment.path_modes", m,
                 "an integer in [1, 3] (resonances in series)")
@@ -136,6 +160,7 @@ class AugmentConfig:
         d["snr_db_range"] = list(self.snr_db_range)
         d["path_hz_range"] = list(self.path_hz_range)
         d["path_damping_range"] = list(self.path_damping_range)
+        d["lowpass_fs_fraction_range"] = list(self.lowpass_fs_fraction_range)
         return d
 
 
@@ -176,13 +201,28 @@ def path_filter(x: np.ndarray, fs_hz: float, natural_hz, damping_ratio) -> np.nd
     return np.fft.irfft(np.fft.rfft(y, n=m, axis=1) * h, n=m, axis=1)[:, n_pre:n_pre + ns]
 
 
+def lowpass_filter(x: np.ndarray, cutoff_fs_fraction: float) -> np.ndarray:
+    """Records ``x`` (n, n_samples) low-passed at ``cutoff_fs_fraction`` x fs: Butterworth of order
+    ``LOWPASS_ORDER``, forwards and backwards (zero phase, gain 1/2 at the cut-off); no RMS rescaling."""
+    require(0 < cutoff_fs_fraction < 0.5, "cutoff_fs_fraction", cutoff_fs_fraction, "a number in (0, 0.5)")
+    sos = butter(LOWPASS_ORDER, 2.0 * cutoff_fs_fraction, output="sos")
+    return sosfiltfilt(sos, np.atleast_2d(np.asarray(x, dtype=np.float64)), axis=1)
+
+
+def _keep_rms(src: np.ndarray, filt: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    r_in, r_out = np.std(src, axis=1), np.std(filt, axis=1)
+    s = np.where(r_out > 0, r_in / np.where(r_out > 0, r_out, 1.0), 1.0)
+    return filt * s[:, None], s
+
+
 def augment_batch(x: np.ndarray, config: AugmentConfig, rng: np.random.Generator, *, fs_hz: float | None = None,
                   info: dict | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Augmented copy of the records ``x`` (n, n_samples), segment starts and speed factors.
 
     ``fs_hz`` (the records' sampling rate) is needed when ``config.path_probability > 0``.
     ``info``, if given, receives the path draws: ``path_applied`` (n,) bool, ``path_hz`` and
-    ``path_damping`` (n, path_modes) (drawn for every record, used where applied), ``path_rms_scale`` (n,).
+    ``path_damping`` (n, path_modes) (drawn for every record, used where applied), ``path_rms_scale`` (n,);
+    and the bandwidth draws: ``lowpass_applied`` (n,) bool, ``lowpass_fs_fraction`` (n,).
 
     Returns
     -------
@@ -217,15 +257,19 @@ def augment_batch(x: np.ndarray, config: AugmentConfig, rng: np.random.Generator
         scale = np.ones(n)
         if applied.any():
             src = a[applied]
-            filt = path_filter(src, fs, f_draw[applied], z_draw[applied])
-            r_in = np.std(src, axis=1)
-            r_out = np.std(filt, axis=1)
-            s_ = np.where(r_out > 0, r_in / np.where(r_out > 0, r_out, 1.0), 1.0)
-            scale[applied] = s_
             a = a.copy()
-            a[applied] = filt * s_[:, None]
+            a[applied], scale[applied] = _keep_rms(src, path_filter(src, fs, f_draw[applied], z_draw[applied]))
         if info is not None:
             info.update(path_applied=applied, path_hz=f_draw, path_damping=z_draw, path_rms_scale=scale)
+    if config.lowpass_probability > 0:
+        low = rng.uniform(size=n) < config.lowpass_probability
+        cut = rng.uniform(*config.lowpass_fs_fraction_range, n)
+        if low.any():
+            a = a.copy() if a is x else a
+            for i in np.nonzero(low)[0]:
+                a[i:i + 1] = _keep_rms(a[i:i + 1], lowpass_filter(a[i:i + 1], float(cut[i])))[0]
+        if info is not None:
+            info.update(lowpass_applied=low, lowpass_fs_fraction=cut)
     out = a * (gain * sign)[:, None]
     if white is not None:
         power = np.mean(out[noisy] ** 2, axis=1)

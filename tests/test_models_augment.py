@@ -9,7 +9,7 @@ import torch
 from scipy.signal import csd, welch
 
 from gearpit.errors import InputError
-from models.augment import AugmentConfig, augment_batch, mount_transmissibility, path_filter
+from models.augment import AugmentConfig, augment_batch, lowpass_filter, mount_transmissibility, path_filter
 from models.io import load_model, save_model
 from models.representations import RepresentationSpec
 from models.toy import toy_signal_set
@@ -107,13 +107,14 @@ def test_path_augmentation_keeps_shapes_and_is_seeded():
 
 
 def test_path_off_changes_nothing():
-    """path_probability 0 (the default): no draws from the generator, no info, the batch of the other
+    """path_probability and lowpass_probability 0 (the default): no draws from the generator, no info, the batch of the other
     augmentations unchanged; everything off and the path off -> the records themselves."""
     x = toy_signal_set(n_per_class=2, seed=4).signals
     r1, r2 = np.random.default_rng(9), np.random.default_rng(9)
     info = {}
     a = augment_batch(x, AugmentConfig(), r1, info=info)   # no fs needed with the path off
-    b = augment_batch(x, dataclasses.replace(AugmentConfig(), path_hz_range=(500.0, 900.0), path_modes=3), r2)
+    b = augment_batch(x, dataclasses.replace(AugmentConfig(), path_hz_range=(500.0, 900.0), path_modes=3,
+                                             lowpass_fs_fraction_range=(0.1, 0.2)), r2)
     for u, v in zip(a, b):
         np.testing.assert_array_equal(u, v)
     assert info == {} and r1.uniform() == r2.uniform()
@@ -121,7 +122,52 @@ def test_path_off_changes_nothing():
     np.testing.assert_array_equal(y, x.astype(np.float32))
 
 
+def _amplitude(y: np.ndarray, f_hz: float) -> float:
+    """Least-squares amplitude of a sine of frequency f_hz in y (sampled at FS)."""
+    t = np.arange(y.size) / FS
+    basis = np.column_stack([np.sin(2 * np.pi * f_hz * t), np.cos(2 * np.pi * f_hz * t)])
+    return float(np.hypot(*np.linalg.lstsq(basis, y, rcond=None)[0]))
+
+
+@pytest.mark.parametrize("ratio", [0.5, 1.0, 1.5])
+def test_lowpass_gain_is_the_documented_zero_phase_butterworth(ratio):
+    """Bandwidth augmentation's filter: gain 1 / (1 + (tan(pi f / fs) / tan(pi f_c / fs))^16) (digital order-8
+    Butterworth forwards and backwards) within 1e-3 absolute, away from the record ends, and no phase shift (the peak stays in place)."""
+    fc = 0.2 * FS
+    t = np.arange(25600) / FS
+    x = np.sin(2 * np.pi * ratio * fc * t)
+    y = lowpass_filter(x[None, :], 0.2)[0]
+    mid = slice(4000, -4000)
+    gain = _amplitude(y[mid], ratio * fc)
+    w = np.tan(np.pi * ratio * 0.2) / np.tan(np.pi * 0.2)
+    assert gain == pytest.approx(1.0 / (1.0 + w ** 16), abs=1e-3)
+    if ratio <= 1.0:
+        assert _amplitude(y[mid] - gain * x[mid], ratio * fc) < 1e-3   # zero phase: y = gain * x
+
+
+def test_lowpass_augmentation_cuts_above_the_drawn_cutoff_and_keeps_the_rms():
+    """Bandwidth only, probability 1: every record's power above 1.5 x the drawn cut-off falls below 1e-4 of
+    the input's there (white noise), the RMS is kept, the cut-off lies in the documented fraction range."""
+    x = _white(4, 1 << 14, seed=21)
+    cfg = dataclasses.replace(AugmentConfig.none(), lowpass_probability=1.0)
+    info = {}
+    y, _, _ = augment_batch(x, cfg, np.random.default_rng(2), fs_hz=FS, info=info)
+    assert info["lowpass_applied"].all()
+    for i in range(x.shape[0]):
+        c = info["lowpass_fs_fraction"][i]
+        assert 0.15 <= c <= 0.45
+        f, px = welch(x[i], fs=FS, nperseg=1024)
+        _, py = welch(y[i].astype(float), fs=FS, nperseg=1024)
+        above = f >= 1.5 * c * FS
+        if above.any():
+            assert py[above].max() < 1e-4 * px[above].mean()
+        assert np.std(y[i]) == pytest.approx(np.std(x[i]), rel=1e-5)
+
+
 @pytest.mark.parametrize("field, kw", [
+    ("augment.lowpass_probability", {"lowpass_probability": -0.1}),
+    ("augment.lowpass_fs_fraction_range", {"lowpass_fs_fraction_range": (0.3, 0.2)}),
+    ("augment.lowpass_fs_fraction_range", {"lowpass_fs_fraction_range": (0.2, 0.5)}),
     ("augment.path_probability", {"path_probability": 1.5}),
     ("augment.path_hz_range", {"path_hz_range": (5000.0, 1000.0)}),
     ("augment.path_hz_range", {"path_hz_range": (1000.0,)}),
