@@ -1,7 +1,8 @@
 """The periodic mesh record a simulation reads: stiffness, error force and per-pair data.
 
 From a :class:`datagen.stiffness.MeshStiffness` and the case's effects
-(hook 1 modifies the stiffness, hooks 2a/2b give deviations), build one record
+(hook 1 modifies the stiffness, hooks 2a/2b give deviations, hook 2c moving
+centres: :meth:`datagen.stiffness.MeshStiffness.slots_at_centre_offset`), build one record
 over ``period_cycles`` mesh cycles (the least common multiple of the stiffness
 period and of every effect's ``deviation_period_cycles``, then reduced to the
 smallest period the samples actually have: 1 cycle for a healthy pair):
@@ -74,20 +75,27 @@ def mesh_record(stiffness, effects, ctx) -> MeshRecord:
     P0 = stiffness.repeat_cycles  # 1 for a healthy pair: a wheel-tooth error then needs z2 cycles, not lcm(z1, z2)
     tooth_fx = [e for e in effects if "tooth_deviation_m" in e.hooks()]
     angle_fx = [e for e in effects if "angle_deviation_m" in e.hooks()]
+    centre_fx = [e for e in effects if "centre_offset_m" in e.hooks()]
     P = P0
-    for e in tooth_fx + angle_fx:
+    for e in tooth_fx + angle_fx + centre_fx:
         P = math.lcm(P, int(e.deviation_period_cycles(ctx)))
-    k_slots = np.tile(stiffness.k_slots_n_per_m[:P0 * ppc], (P // P0, 1))
+    x = np.arange(P * ppc) / ppc
+    th1, th2 = 2 * np.pi * x / z1, 2 * np.pi * x / z2
+    if centre_fx:   # hook 2c: the pair at the moving centres (one more slot: an early entry)
+        offs = [np.broadcast_to(np.asarray(e.centre_offset_m(th1, th2, ctx), float), (2,) + x.shape) for e in centre_fx]
+        k_slots = stiffness.slots_at_centre_offset(sum(o[0] for o in offs), sum(o[1] for o in offs))
+    else:
+        k_slots = np.tile(stiffness.k_slots_n_per_m[:P0 * ppc], (P // P0, 1))
     if tooth_fx:
         def f(g, pt, wt):
             return sum(e.tooth_deviation_m(g, pt, wt, ctx) for e in tooth_fx)
 
         e_force_slots = stiffness.weighted(f, n_cycles=P)
+        # with hook 2c the deviations are those of the nominal contact positions; the early pair has none
+        e_force_slots = np.pad(e_force_slots, ((0, 0), (0, k_slots.shape[1] - e_force_slots.shape[1])))
     else:
         e_force_slots = np.zeros_like(k_slots)
     if angle_fx:
-        x = np.arange(P * ppc) / ppc
-        th1, th2 = 2 * np.pi * x / z1, 2 * np.pi * x / z2
         e_ang = sum(np.asarray(e.angle_deviation_m(th1, th2, ctx), float) for e in angle_fx)
         e_force_slots = e_force_slots + k_slots * e_ang[:, None]
     with np.errstate(invalid="ignore", divide="ignore"):

@@ -51,6 +51,10 @@ How to write an effect
                                     positive = material missing = less deflection carried
    2b   ``angle_deviation_m``       deviation e(theta1, theta2) (m) along the line of action
                                     (run-out, eccentricity)
+   2c   ``centre_offset_m``         displacement (dx, dy)(theta1, theta2) (m) of the wheel centre
+                                    relative to the pinion centre (eccentricity): moves the start
+                                    of contact and the mesh timing
+                                    (:meth:`datagen.stiffness.MeshStiffness.slots_at_centre_offset`)
    3    ``generalized_force``       extra generalized forces (n_t, n_dof) on the nominal
                                     trajectory (unbalance, torque ripple); N or N m per DOF
    4    ``mesh_force_batch``        nonlinear mesh law F(delta, delta_dot) and its derivatives,
@@ -61,6 +65,8 @@ How to write an effect
    7    ``measurement``             channels -> channels: gain, noise, clipping (gets an rng)
    ===  ==========================  ==============================================================
 
+   Hook 2c is part of point 2: the record's pair stiffnesses are those of the
+   pair with its centres displaced so at every mesh position.
    Hooks 2a/2b define the *error force* E = sum over contact slices of
    k_slice * e, so the linear mesh force is F = k(x) delta - E (+ damping).
    Hook 3 sees the nominal trajectory (time and reference shaft angles) and
@@ -123,7 +129,7 @@ from datagen.effects.fit import Fit, resolve_fit
 from gearpit.errors import InputError
 
 #: the contribution points, in simulation order (method names on :class:`Effect`)
-HOOKS = ("mesh_stiffness", "tooth_deviation_m", "angle_deviation_m", "generalized_force",
+HOOKS = ("mesh_stiffness", "tooth_deviation_m", "angle_deviation_m", "centre_offset_m", "generalized_force",
          "mesh_force_batch", "operating_point", "output_path", "measurement")
 
 _REGISTRY: dict[str, type["Effect"]] = {}
@@ -285,6 +291,14 @@ class Effect:
                           ctx: EffectContext) -> np.ndarray:
         """Deviation (m) along the line of action as a function of the shaft angles."""
         return np.zeros(np.broadcast(theta_pinion_rad, theta_wheel_rad).shape)
+
+    def centre_offset_m(self, theta_pinion_rad: np.ndarray, theta_wheel_rad: np.ndarray,
+                        ctx: EffectContext) -> np.ndarray:
+        """Displacement ``(dx, dy)`` (m, shape ``(2, ...)``) of the wheel centre relative to the pinion centre as
+        a function of the shaft angles; frame of :meth:`datagen.stiffness.MeshStiffness.slots_at_centre_offset`
+        (``x`` along the line of centres, pinion to wheel)."""
+        shape = np.broadcast(theta_pinion_rad, theta_wheel_rad).shape
+        return np.zeros((2,) + shape)
 
     # ------------------------------------------------------------------ 3. extra forces
     def generalized_force(self, t_s: np.ndarray, theta_pinion_rad: np.ndarray, theta_wheel_rad: np.ndarray,

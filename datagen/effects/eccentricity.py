@@ -1,4 +1,4 @@
-"""Eccentricity (run-out) of the pinion or of the wheel along the line of action (hook 2b).
+"""Eccentricity (run-out) of the pinion or of the wheel: a transmission error (hook 2b) and a moving centre (hook 2c).
 
 A gear whose pitch circle is offset by ``a`` from its axis of rotation moves
 its teeth along the line of action by
@@ -12,18 +12,29 @@ force ``k(x) e(theta)`` carries ``+/- fr`` sidebands around every mesh
 harmonic. The radial run-out a ball probe reads is ``F_r = 2 a``
 (ISO 1328-2: ``F_r = 0.8 F_p`` at a grade, :mod:`datagen.effects.accuracy_grade`).
 
-In this model the signature is *weak*: a once-per-revolution error is slow
-compared with the drive train's torsion modes, so the gears simply turn by
-``e / r_b`` to follow it (the transmission error ``dte_m`` carries the 1x line
-of amplitude ``a``) and the tooth load barely changes. On ``spur-gds`` with a
-25-tooth pinion at 1500 rpm and 20 N m, ``a = 10 um`` gives sidebands of about
--55 to -60 dB (pinion) and -71 to -73 dB (wheel) re the ``f_m`` line. Not
-modelled, and also of that order for ``a = 10 um``: the shift of mesh timing
-(a phase modulation of the stiffness, ``2 pi a / p_bt`` rad, -46 dB) - the
-time-stepping solver includes it only through the pinion's vibration angle -
-and the change of centre distance and contact ratio (``a / sin(alpha_w)`` of
-path of contact). Both would need a contract hook that shifts the mesh
-position.
+Through the moving centre (hook 2c, :meth:`datagen.stiffness.MeshStiffness.slots_at_centre_offset`)
+it also changes the mesh itself, once per revolution: the centre distance
+varies by up to ``a``, which moves the start of contact by up to
+``a / sin(alpha_w)`` (a contact-ratio modulation of ``a / (p_bt sin alpha_w)``:
+0.074 for ``a = 150 um`` on ``spur-gds``), and the line of centres and the
+pressure angle turn, which shifts the mesh timing by up to
+``r_b1 a / (a_w sin alpha_w)`` (0.016 of a base pitch for 150 um). That
+stiffness modulation, not the transmission error, makes the ``+/- fr``
+sidebands: on ``spur-gds`` at 1000 rpm and 50 N m with ``a = 50 um`` the
+``f_m +/- fr`` lines of the pinion-bearing acceleration are at -25 to -27 dB
+re the ``f_m`` line with it, -54 to -56 dB without it (pinion; wheel: -26 to
+-29 dB against -68 to -69 dB). The transmission error alone is a
+once-per-revolution error, slow compared with the drive train's torsion modes,
+so the gears simply turn by ``e / r_b`` to follow it and the tooth load barely
+changes.
+
+Geometry: in the frame of hook 2c (``x`` from pinion to wheel centre, the line
+of action along ``(sin alpha_w, cos alpha_w)``, the pinion turning so that
+contact runs from T1 to T2), the offset of the pinion's centre points at
+``psi_1 = theta_1 + phi + pi - alpha_w`` and that of the wheel at
+``psi_2 = pi - theta_2 - phi - alpha_w`` (the wheel turns the other way).
+These are the angles at which the offset's component along the line of action
+is the transmission error above with its sign (positive: the flanks part).
 
 Two effects, one per gear, so that attribution names the gear and each fit
 has two parameters: ``eccentricity_pinion`` and ``eccentricity_wheel``.
@@ -82,6 +93,15 @@ class _Eccentricity(Effect):
     def angle_deviation_m(self, theta_pinion_rad, theta_wheel_rad, ctx):
         theta = theta_pinion_rad if self.gear == "pinion" else theta_wheel_rad
         return self.amplitude_m * np.sin(np.asarray(theta, dtype=float) + self.phase_rad)
+
+    def centre_offset_m(self, theta_pinion_rad, theta_wheel_rad, ctx):
+        """The wheel centre relative to the pinion centre (module docstring, 'Geometry')."""
+        alpha = ctx.pair.working_pressure_angle_rad
+        if self.gear == "pinion":   # the pinion centre moves: the wheel's relative offset is minus that
+            psi = np.asarray(theta_pinion_rad, dtype=float) + self.phase_rad + math.pi - alpha
+            return -self.amplitude_m * np.array([np.cos(psi), np.sin(psi)])
+        psi = math.pi - np.asarray(theta_wheel_rad, dtype=float) - self.phase_rad - alpha
+        return self.amplitude_m * np.array([np.cos(psi), np.sin(psi)])
 
 
 @register
