@@ -61,6 +61,8 @@ OUT = ROOT / "experiments" / "out" / "models"
 REAL = ROOT.parent / "shared" / "data" / "spectraquest_gfd"
 RESULTS_MD = ROOT / "experiments" / "RESULTS.md"
 SEED = 0
+#: wall-time budget per CNN run (s), far above what any run needs on 2 cores
+MAX_SECONDS = 4 * 3600.0
 
 REPRESENTATIONS = {
     "raw": RepresentationSpec(kind="raw", n_samples=8192),
@@ -159,8 +161,10 @@ def save_run(path: Path, metrics: dict, pred, data: SignalSet, title: str) -> No
 def cnn_run(train: SignalSet, tests: dict[str, SignalSet], variant: str, where: Path, *,
             task: str = "multi", augment: AugmentConfig | None = None, allow_mismatch: bool = False) -> dict:
     rep, operating = VARIANTS[variant] if variant in VARIANTS else (MESH_ORDER, ())
+    # the epoch limit and early stopping end every run, not the wall-time budget: on a loaded machine the
+    # default 900 s budget cut the 2 s one-rig runs short, which made the numbers depend on the load
     cfg = TrainConfig(representation=rep, task=task, augment=augment or AugmentConfig(), seed=SEED,
-                      operating_inputs=operating)
+                      operating_inputs=operating, max_seconds=MAX_SECONDS)
     key = f"{where.relative_to(OUT)}#{variant}"
     old = REUSE.get(key)
     # a run stored before the config was recorded comes from the code without side inputs (models/ unchanged
