@@ -46,7 +46,13 @@ penalised because the calibration already bent the nuisances towards it. The
 time-stepped candidates (fitted in the second process on a shorter window)
 are fitted at the calibrated nuisances without refit.
 
-The best-ranked effect is *claimed* when it lowers the total error by at
+Errors: the fits minimise the raw error ``E`` (:mod:`compare.error`, step 6);
+a candidate's reported error and its reduction are the excess over the noise
+error (step 7), with the noise error ``N_v`` measured once on the current model
+(the baseline) and used for every candidate: ``N`` is a property of the
+measurement's noise, and one value for all keeps the ranking that of ``E``.
+
+The best-ranked effect is *claimed* when it lowers the total (excess) error by at
 least ``claim_reduction`` (fraction); one at a time, because once it is in
 the model the next comparison ranks the rest against the improved model.
 Other effects that also pass the threshold are listed as alternatives
@@ -67,8 +73,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from compare.comparison import Reference, evaluate, prepare_reference, simulate_model
-from compare.error import effective_count
+from compare.comparison import NOISE_DRAWS, Reference, evaluate, prepare_reference, simulate_model
+from compare.error import combine, effective_count, excess
 from compare.fitspace import CHAIN_EFFECTS, fit_space
 from compare.search import Search, Trial, line_sigma_u, quadratic, round_a, round_b, round_c, round_d
 from gearpit.errors import GearpitError, require
@@ -108,6 +114,16 @@ class CandidateResult:
     claimed: bool = False
     status: str = "fitted"
     nuisance: dict = field(default_factory=dict)
+    #: the raw errors (what the fit minimised) and the baseline's noise error (module docstring)
+    raw_error_db: float = math.inf
+    raw_baseline_error_db: float = math.nan
+    noise_view_db: dict = field(default_factory=dict)
+
+    def set_raw(self, raw_view_db: dict, raw_total_db: float) -> None:
+        """Set the errors from the raw view errors of the fit: the excess over ``noise_view_db``."""
+        self.raw_error_db = raw_total_db
+        self.view_error_db = excess(raw_view_db, self.noise_view_db)
+        self.error_db = combine(self.view_error_db)
 
     @property
     def reduction(self) -> float:
@@ -122,7 +138,10 @@ class CandidateResult:
                 "baseline_error_db": self.baseline_error_db, "reduction": self.reduction,
                 "view_error_db": self.view_error_db, "window": self.window, "n_evaluations": self.n_evaluations,
                 "explains": self.explains, "claimed": self.claimed, "status": self.status,
-                "nuisance": {k: float(v) for k, v in self.nuisance.items()}}
+                "nuisance": {k: float(v) for k, v in self.nuisance.items()},
+                "raw_error_db": self.raw_error_db if math.isfinite(self.raw_error_db) else None,
+                "raw_baseline_error_db": self.raw_baseline_error_db,
+                "noise_error_db": combine(self.noise_view_db) if self.noise_view_db else 0.0}
 
 
 @dataclass
@@ -179,7 +198,7 @@ def _run(trials: list[tuple[Search, Trial]], ref: Reference, model, settings, tr
     base = None
     if with_baseline:
         require(ys[0] is not None, "model", model.describe(), "a model that simulates at this operating point")
-        base = evaluate(ref, ys[0], ref.fs_hz, seed=settings.seed).residuals
+        base = evaluate(ref, ys[0], ref.fs_hz, seed=settings.seed, noise_draws=NOISE_DRAWS).residuals
         ys = ys[1:]
     for (s, t, _), y in zip(built, ys):
         if y is not None and np.all(np.isfinite(y)):
@@ -309,16 +328,17 @@ def _refine_nuisances(results: list, ref: Reference, model, calibration, setting
     cs = CalibrationSettings(parameters=tuple(calibration.values), widths_u=tuple(settings.refine_widths_u),
                              points_per_side=tuple(settings.refine_points), seed=settings.seed)
     n = 0
-    ranked = sorted((c for c in results if c.status == "fitted" and math.isfinite(c.error_db)),
-                    key=lambda c: c.error_db)
+    ranked = sorted((c for c in results if c.status == "fitted" and math.isfinite(c.raw_error_db)),
+                    key=lambda c: c.raw_error_db)
     for c in ranked[:settings.refine_top]:
         effect = EffectSpec.from_dict({"name": c.effect, **c.params}).build()
         cal = calibrate(ref, model, extra_effects=(effect,), settings=cs, start=calibration.values, free_effect=True)
         n += cal.n_simulations
-        c.nuisance = dict(cal.values) if cal.error_db < c.error_db else dict(calibration.values)
-        if cal.error_db < c.error_db:
+        # raw errors on both sides (Calibration.error_db is raw): the fit's objective
+        c.nuisance = dict(cal.values) if cal.error_db < c.raw_error_db else dict(calibration.values)
+        if cal.error_db < c.raw_error_db:
             c.params = {**c.params, **cal.effect_params}
-            c.error_db, c.view_error_db = cal.error_db, dict(cal.view_error_db)
+            c.set_raw(dict(cal.view_error_db), cal.error_db)
             c.explains = _explained(ref, cal.residual_db, disagreements)
     return n
 
@@ -327,8 +347,9 @@ def _result(s: Search, base, ref: Reference, n_eff: float, disagreements) -> Can
     best = s.best
     sig = s.cls.signature
     if best is None:
-        return CandidateResult(s.space.effect, sig, {}, {}, math.inf, base.total_db, {}, _window(ref), len(s.trials),
-                               status="failed")
+        return CandidateResult(s.space.effect, sig, {}, {}, math.inf, base.excess_total_db, {}, _window(ref),
+                               len(s.trials), status="failed", raw_baseline_error_db=base.total_db,
+                               noise_view_db=dict(base.noise_view_db or {}))
     params = dict(best.values)
     if s.space.choice:
         params[s.space.choice[0]] = best.choice
@@ -348,8 +369,11 @@ def _result(s: Search, base, ref: Reference, n_eff: float, disagreements) -> Can
             su = _conditional_sigma_u(s, j, best, n_eff)
         sg = p.sigma_from_u(params[p.name], su)
         sigma[p.name] = sg if sg <= p.hi - p.lo else math.inf  # wider than the bounds: not identifiable
-    return CandidateResult(s.space.effect, sig, params, sigma, best.error_db, base.total_db, best.view_error_db,
-                           _window(ref), len(s.trials), _explained(ref, best.residual_db, disagreements))
+    c = CandidateResult(s.space.effect, sig, params, sigma, math.inf, base.excess_total_db, {}, _window(ref),
+                        len(s.trials), _explained(ref, best.residual_db, disagreements),
+                        raw_baseline_error_db=base.total_db, noise_view_db=dict(base.noise_view_db or {}))
+    c.set_raw(best.view_error_db, best.error_db)
+    return c
 
 
 def _explained(ref: Reference, residual_db: np.ndarray, disagreements) -> list:

@@ -171,7 +171,9 @@ class Calibration:
     start : dict
         The values before calibration (the model's drive train).
     error_before_db, error_db : float
-        Total error with the start values and with the calibrated ones (dB), of the model calibrated.
+        Raw total error ``E`` (:mod:`compare.error`, step 6: before the noise correction; the calibration
+        adds the same noise to every point, so its noise error is common to all) with the start values and
+        with the calibrated ones (dB), of the model calibrated.
     held_out : tuple of str
         Time-stepped effects of the model left out of the calibration (module docstring).
     effect_params : dict

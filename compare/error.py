@@ -26,6 +26,25 @@ Definition (what ``error_db`` means everywhere in gearpit)
 change when the measurement is scaled (``G`` absorbs it), and grows with every
 residual (it is a weighted RMS).
 
+7. **Noise correction (the headline error).** Two records of the *same* vibration
+   with independent sensor noise at the measured floor do not give ``E = 0``:
+   levels near their floors scatter, and at SNR 30 dB this alone gives
+   ``E`` of 0.5-0.9 dB, as large as many effects' signatures. The comparison
+   therefore also measures the *noise error* ``N_v`` of each view: the error
+   between the model record with independent noise draws at the measured floor
+   (:func:`compare.comparison.evaluate`, ``noise_draws``; the RMS over the draw
+   pairs). Since noise and model mismatch add in ``E_v^2`` (independent), the
+   **excess error** ``X_v = sqrt(max(0, E_v^2 - N_v^2))`` estimates the error the
+   two records would have without noise; ``X`` (total) combines the ``X_v`` as in
+   step 6. ``X`` is what ``error_db`` reports (``raw_error_db``: ``E``;
+   ``noise_error_db``: ``N``). It keeps the properties above: 0 for identical
+   signals (``E`` = 0), gain-invariant, growing with every residual (``N`` does
+   not depend on the measurement's residuals). A model at the noise floor has
+   ``X`` near 0 (it fluctuates with the draws: a few 0.1 dB at 60 effective
+   residuals), and halving ``X`` means halving the mismatch beyond noise.
+   Where the model's own floor is already above the measured one no noise is
+   drawn, ``N`` = 0 and ``X = E`` (conservative).
+
 References
 ----------
 Kish, L. (1965). Survey Sampling. Wiley (effective number of weighted observations, used for
@@ -55,15 +74,38 @@ class Residuals:
     residual_db : ndarray
         ``r_i`` per location (dB).
     view_error_db : dict
-        ``E_v`` per view (dB).
+        ``E_v`` per view (dB), the raw error.
     total_db : float
-        ``E`` (dB).
+        ``E`` (dB), the raw error (what fits minimise).
+    noise_view_db : dict or None
+        ``N_v`` per view (dB), the noise error (step 7), when measured.
     """
 
     gain_db: float
     residual_db: np.ndarray
     view_error_db: dict
     total_db: float
+    noise_view_db: dict | None = None
+
+    def with_noise(self, noise_view_db: dict | None) -> "Residuals":
+        """The same residuals with the noise error ``N_v`` of each view (step 7)."""
+        return Residuals(self.gain_db, self.residual_db, self.view_error_db, self.total_db,
+                         None if noise_view_db is None else dict(noise_view_db))
+
+    @property
+    def excess_view_db(self) -> dict:
+        """``X_v`` per view (step 7; ``E_v`` when no noise error is known)."""
+        return excess(self.view_error_db, self.noise_view_db)
+
+    @property
+    def excess_total_db(self) -> float:
+        """``X`` (step 7), the headline error."""
+        return combine(self.excess_view_db)
+
+    @property
+    def noise_total_db(self) -> float:
+        """The noise error's total, ``N`` (0 when unknown)."""
+        return combine(self.noise_view_db) if self.noise_view_db else 0.0
 
 
 def location_weights(plan: Plan) -> np.ndarray:
@@ -132,13 +174,22 @@ def summarise(r: np.ndarray, plan: Plan, gain_db: float = 0.0) -> Residuals:
     """View errors and the total from residuals (steps 5-6)."""
     w = location_weights(plan)
     views = {}
-    num = den = 0.0
     for view in VIEWS:
         idx = plan.view_index(view)
         if idx.size == 0:
             continue
-        e = float(np.sqrt(np.sum(w[idx] * r[idx] ** 2) / np.sum(w[idx])))
-        views[view] = e
-        num += VIEW_WEIGHTS[view] * e * e
-        den += VIEW_WEIGHTS[view]
-    return Residuals(gain_db=float(gain_db), residual_db=r, view_error_db=views, total_db=float(np.sqrt(num / den)))
+        views[view] = float(np.sqrt(np.sum(w[idx] * r[idx] ** 2) / np.sum(w[idx])))
+    return Residuals(gain_db=float(gain_db), residual_db=r, view_error_db=views, total_db=combine(views))
+
+
+def combine(view_db: dict) -> float:
+    """The total of step 6 from per-view errors: ``sqrt(sum_v W_v E_v^2 / sum_v W_v)``."""
+    num = sum(VIEW_WEIGHTS[v] * e * e for v, e in view_db.items())
+    den = sum(VIEW_WEIGHTS[v] for v in view_db)
+    return float(np.sqrt(num / den)) if den > 0 else 0.0
+
+
+def excess(view_db: dict, noise_view_db: dict | None) -> dict:
+    """``X_v = sqrt(max(0, E_v^2 - N_v^2))`` per view (step 7); ``E_v`` where ``N_v`` is unknown."""
+    n = noise_view_db or {}
+    return {v: float(np.sqrt(max(0.0, e * e - n.get(v, 0.0) ** 2))) for v, e in view_db.items()}

@@ -5,11 +5,13 @@
     {"run": 3, "time_utc": "2026-11-21T06:10:00Z", "measurement": "rig.csv", "measurement_sha256": "...",
      "model": "eccentricity_pinion(amplitude_m=0.00015, phase_rad=0.0)", "effects": [{"name": ..., ...}],
      "speed_rpm": 1000.0, "gain_db": 11.3, "error_db": {"order": ..., ..., "total": ...},
+     "raw_error_db": {...}, "noise_error_db": {...},
      "claimed": "pitch_error", "candidates": [{"effect": ..., "params": {...}, "reduction": ...}, ...],
      "calibration": {"parameters": {"mesh_damping_ratio": 0.063, ...}, "sigma": {...}, "start": {...},
                      "error_before_db": 0.77, "error_db": 0.65, ...}}
 
-``error_db`` is that of the calibrated model when the nuisances were calibrated (``calibration`` not null).
+``error_db`` is the excess over the noise error (:mod:`compare.error`, step 7), ``raw_error_db`` the error
+before that correction and ``noise_error_db`` the noise error; all three are those of the calibrated model when the nuisances were calibrated (``calibration`` not null).
 
 Rows are only ever appended (one ``write`` of one line per comparison), so the
 history of "add an effect, watch the error fall" stays a table.
@@ -63,7 +65,8 @@ def make_row(comparison, attribution=None, *, run: int, measurement_path: str | 
            "measurement_sha256": file_sha256(measurement_path) if measurement_path else None,
            "model": model.describe(), "effects": [e.to_dict() for e in model.effects],
            "speed_rpm": ref.speed.speed_rpm, "gain_db": comparison.evaluation.residuals.gain_db,
-           "error_db": comparison.error_db, "claimed": None, "candidates": [],
+           "error_db": comparison.error_db, "raw_error_db": comparison.raw_error_db,
+           "noise_error_db": comparison.noise_error_db, "claimed": None, "candidates": [],
            "calibration": comparison.calibration.to_dict() if comparison.calibration is not None else None}
     if attribution is not None:
         row["claimed"] = attribution.claimed[0].effect if attribution.claimed else None
@@ -93,13 +96,15 @@ def _jsonable(v):
     return str(v)
 
 
-def last_fit(rows: list[dict], effect: str) -> dict | None:
-    """Fitted parameters of ``effect`` in the latest row that has them (for ``--add EFFECT`` without values)."""
+def last_candidate(rows: list[dict], effect: str) -> dict | None:
+    """The latest ledger entry of candidate ``effect`` with fitted parameters (``params``, and ``nuisance``:
+    the drive-train values they were fitted with, in calibrated runs)."""
     for row in reversed(rows):
         for c in row.get("candidates", []):
             if c.get("effect") == effect and c.get("params") is not None:
-                return c["params"]
+                return c
     return None
+
 
 
 def history_table(rows: list[dict]) -> str:

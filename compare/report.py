@@ -61,6 +61,8 @@ def document(comparison, attribution=None, ledger_rows=(), *, measurement_path: 
         "calibration": comparison.calibration.to_dict() if comparison.calibration is not None else None,
         "noise_added_rms": ev.noise_added_rms,
         "error_db": {k: float(v) for k, v in comparison.error_db.items()},
+        "raw_error_db": {k: float(v) for k, v in comparison.raw_error_db.items()},
+        "noise_error_db": {k: float(v) for k, v in comparison.noise_error_db.items()},
         "locations": locations,
         "disagreements": [d.to_dict() for d in comparison.disagreements],
         "attribution": attribution.to_dict() if attribution is not None else None,
@@ -121,7 +123,8 @@ def _calibration_html(cal: dict | None) -> list[str]:
             "with the sensor gain (module <code>compare.calibration</code>); the calibrated model is the baseline "
             "every candidate effect is measured against.</p>",
             _table(["parameter", "model file / default", "calibrated", "1 sigma ('-': not identifiable)"], rows),
-            f"<p>Total error {cal['error_before_db']:.3f} dB before, {cal['error_db']:.3f} dB after "
+            f"<p>Raw total error (before the noise correction) {cal['error_before_db']:.3f} dB before, "
+            f"{cal['error_db']:.3f} dB after "
             f"({cal['n_simulations']} simulations, {cal['elapsed_s']:.1f} s).</p>"]
 
 

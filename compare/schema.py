@@ -18,7 +18,7 @@ SCHEMA = {
     "title": "gearpit model-versus-measurement comparison",
     "type": "object",
     "required": ["schema", "software_version", "measurement", "model", "gain_db", "calibration", "error_db",
-                 "locations", "disagreements", "attribution", "ledger"],
+                 "raw_error_db", "noise_error_db", "locations", "disagreements", "attribution", "ledger"],
     "additionalProperties": False,
     "properties": {
         "schema": {"const": "gearpit.compare/1"},
@@ -46,7 +46,8 @@ SCHEMA = {
                            "sigma": {"type": "object", "additionalProperties": _NUM,
                                      "description": "1-sigma (SI), null: not identifiable"},
                            "start": {"type": "object", "additionalProperties": {"type": "number"}},
-                           "error_before_db": {"type": "number"}, "error_db": {"type": "number"},
+                           "error_before_db": {"type": "number", "description": "raw total error E at the start"},
+                           "error_db": {"type": "number", "description": "raw total error E calibrated"},
                            "gain_db": {"type": "number"}, "n_simulations": {"type": "integer"},
                            "elapsed_s": {"type": "number"},
                            "held_out": {"type": "array", "items": {"type": "string"},
@@ -55,7 +56,11 @@ SCHEMA = {
                                      "description": "views whose error the calibration minimises"},
                            "objective_before_db": {"type": "number"}, "objective_db": {"type": "number"}}},
         "noise_added_rms": {"type": "number", "description": "white noise added to the model to match the floor"},
-        "error_db": _ERRORS,
+        "error_db": {**_ERRORS, "description": "the headline error: excess over the noise error, "
+                                                "sqrt(max(0, E_v^2 - N_v^2)) per view (compare.error, step 7)"},
+        "raw_error_db": {**_ERRORS, "description": "E: the weighted RMS of the residuals (compare.error, step 6)"},
+        "noise_error_db": {**_ERRORS, "description": "N: E between the model with independent noise draws at the "
+                                                      "measured floor (0: no noise drawn)"},
         "locations": {
             "type": "array",
             "description": "the residual map: every compared location",
@@ -97,7 +102,10 @@ SCHEMA = {
                                                         "status": {"type": "string"},
                                                         "nuisance": {"type": "object",
                                                                      "description": "drive-train values of the "
-                                                                                    "fit (calibrated runs)"}}}},
+                                                                                    "fit (calibrated runs)"},
+                                                        "raw_error_db": _NUM,
+                                                        "raw_baseline_error_db": _NUM,
+                                                        "noise_error_db": {"type": "number"}}}},
                 "unexplained": {"type": "array", "items": {"type": "object", "required": ["key", "text"]}},
                 "claimed": {"type": "array", "items": {"type": "string"}},
                 "elapsed_s": {"type": "number"}, "n_simulations": {"type": "integer"},

@@ -6,8 +6,13 @@ Used by ``gearpit compare`` and by ``experiments/compare_walkthrough.py``.
   measurement; a missing file is the baseline and is written, so the user has
   something to edit;
 - ``add`` items are ``EFFECT[:key=value,...]``; without values the parameters
-  fitted by the latest comparison in the ledger are used (else the defaults);
-  the model file is rewritten with the effect added;
+  fitted by the latest comparison in the ledger are used (else the defaults),
+  and when that comparison calibrated the nuisances, the drive-train values
+  the effect was fitted with go into the model's ``[drivetrain]`` too (the
+  next calibration starts there: a calibration is a local search, and
+  started from the defaults with a housing mode in the model it settled
+  worse than the joint fit had); the model file is rewritten with the effect
+  added;
 - ``plugins`` are Python files with user effects; they are recorded in the model;
 - with ``calibrate=True`` (or the model's ``[calibration] enabled = true``) the drive-train nuisances are
   calibrated to the measurement before the comparison (:mod:`compare.calibration`, off by default: its
@@ -22,7 +27,7 @@ from pathlib import Path
 from compare.attribution import Attribution, AttributionSettings, attribute
 from compare.calibration import calibrated_compare
 from compare.comparison import Comparison, prepare_reference
-from compare.ledger import append_row, last_fit, ledger_path, make_row, read_ledger
+from compare.ledger import append_row, last_candidate, ledger_path, make_row, read_ledger
 from compare.measurement import load_measurement
 from compare.model import ComparisonModel, parse_add
 from compare.report import document, write_html, write_json
@@ -49,12 +54,15 @@ def extend_model(model: ComparisonModel, add: list[str], rows: list[dict], messa
     for item in add:
         name, params = parse_add(item)
         if params is None:
-            fitted = last_fit(rows, name)
+            fitted = last_candidate(rows, name)
             cls = get(name)
             if fitted is not None:
-                allowed = {k: v for k, v in fitted.items() if k in {f for f in cls().params()}}
+                allowed = {k: v for k, v in fitted["params"].items() if k in {f for f in cls().params()}}
                 params = allowed
                 messages.append(f"added {name} with the parameters fitted by the last comparison: {params}")
+                if fitted.get("nuisance"):   # fitted jointly with the calibrated nuisances: keep them together
+                    model = model.with_drivetrain(fitted["nuisance"])
+                    messages.append(f"drive train set to the nuisances it was fitted with: {fitted['nuisance']}")
             else:
                 params = {}
                 messages.append(f"added {name} with its default parameters (no fit in the ledger yet)")

@@ -227,7 +227,10 @@ class MeshStiffness:
           every pinion tooth's contact position moves by ``r_b1 (alpha' - alpha_w - beta)``: the mesh timing
           shifts.
 
-        A pair is in contact where its shifted position lies in ``[A', E]``; its healthy slice stiffness is
+        A pair is in contact where its shifted position lies in ``[A', E]``, resolved below the position grid
+        (each edge of the nominal point-sampled contact is a ramp one grid step wide, moved by the offset's
+        change of that edge: the edges move continuously with the offset, not in steps of the grid, and no
+        offset gives the nominal contact); its healthy slice stiffness is
         that of the shifted position (the compliance table, held at its end values outside the nominal
         path: the wheel's roll offset and the flank below the nominal start are not re-tabulated). A
         pitted pair's slice stiffness is its nominal one scaled by the ratio of healthy stiffnesses (the pit
@@ -257,11 +260,23 @@ class MeshStiffness:
         shift = w * math.tan(pair.base_helix_angle_rad)
         u = (np.arange(dx.size) % ppc) / ppc
         slots = np.arange(-1, S)                                                   # -1: the early pair
-        g = (pair.contact_start_m + (u[:, None, None] + slots[None, :, None]) * pair.base_pitch_m
-             - shift[None, None, :] + dg[:, None, None])
-        eps = 1e-12 * pair.base_pitch_m
-        inside = (g >= start[:, None, None] - eps) & (g <= end + eps)
-        k_new = np.where(inside, dw / pc(np.where(inside, g, pair.contact_start_m)), 0.0)
+        g0 = (pair.contact_start_m + (u[:, None, None] + slots[None, :, None]) * pair.base_pitch_m
+              - shift[None, None, :])                                             # nominal positions
+        g = g0 + dg[:, None, None]
+        # Contact resolved below the grid: along one slice the nominal positions are A - shift + m h (m an
+        # integer, h = p_bt / ppc); the nominal contact is m_s <= m <= m_e (point-sampled, as
+        # mesh_stiffness). In those coordinates the offset moves the window's start by dA - dg and its end
+        # by -dg; each edge is a ramp one step wide moved by that amount, so the fraction equals the nominal
+        # contact for no offset and the mean number of pairs changes by exactly (A - A') / p_bt.
+        h = pair.base_pitch_m / ppc
+        m = np.rint((u[:, None, None] + slots[None, :, None]) * ppc + 0 * shift[None, None, :])
+        m_s = np.ceil(shift / h - 1e-9)
+        m_e = np.floor((end - pair.contact_start_m + shift) / h + 1e-9)
+        d_start = ((start - pair.contact_start_m) - dg)[:, None, None] / h
+        d_end = -dg[:, None, None] / h
+        frac = np.clip(m - (m_s + d_start) + 1.0, 0.0, 1.0) * np.clip((m_e + d_end) - m + 1.0, 0.0, 1.0)
+        frac = np.where(frac < 1e-12, 0.0, np.where(frac > 1.0 - 1e-12, 1.0, frac))
+        k_new = np.where(frac > 0, frac * dw / pc(np.where(frac > 0, g, pair.contact_start_m)), 0.0)
         k = k_new[:, 1:]
         if self._overrides:
             k_nom = np.tile(self._k_cycle, (n_cycles, 1, 1))                        # (n, S, slices)

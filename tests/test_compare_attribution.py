@@ -71,17 +71,15 @@ def test_disturbance_outside_the_registry_is_unexplained(disturbance):
 
 
 #: effects whose signature, at the tested nuisance differences, is of the same size as what the nuisances
-#: themselves do to the mesh-harmonic levels (measured: the model WITH the true effect still has 0.6-0.8 of the
-#: baseline error): they rank first, but the error cannot halve and the fit is loose. The error's own noise floor
-#: (true effect and true nuisances against the rig: 0.6-0.9 dB, two independent noise draws at SNR 30 dB) is the
-#: limit for the three whose baseline error is ~1 dB; calibrating the nuisances (compare.calibration) does not
-#: lift it (calibrated baseline -> calibrated model with the claimed effect, measured: hertz_nonlinear 0.92 ->
-#: 0.61 dB (x0.66), eccentricity_wheel 1.68 -> 0.90 dB (x0.53), tip_relief no longer ranks first).
-#: transmission_path was here until the housing filter stopped ringing at the record start (circular filtering).
+#: themselves do to the mesh-harmonic levels: they rank first and are claimed, but the model with them
+#: (measured, excess error over the noise error) keeps more than half of the baseline's error. With the nuisance
+#: calibration on (compare.calibration) hertz_nonlinear halves it (x0.36), tip_relief does not (the calibration
+#: pulls the mesh damping to 0.097, near its bound, which imitates the relief, and tip_relief drops to third).
+#: eccentricity_wheel was here until the eccentric centre moved the mesh (hook 2c).
 NUISANCE_LIMITED = {
-    "hertz_nonlinear": "shifts the mesh resonance like the bearing-stiffness nuisance does (true model: 0.76 x error)",
-    "tip_relief": "changes mesh-harmonic levels like the damping nuisances do (fit: 0.78 x error)",
-    "eccentricity_wheel": "sidebands only at 2000 rpm, where the nuisance floor is 1.0 dB (fit: 0.58 x error)",
+    "hertz_nonlinear": "shifts the mesh resonance like the bearing-stiffness nuisance does (measured: 0.52 x error)",
+    "tip_relief": "changes mesh-harmonic levels like the mesh-damping nuisance does (measured: 0.66 x error, "
+                  "fitted 5.6 vs 10 um)",
 }
 
 
@@ -148,7 +146,7 @@ def test_calibration_recovers_the_nuisances_of_a_rig_without_hidden_effect():
     cal = calibrate(ref, ComparisonModel())
     ok = _within(cal.values, NUISANCE)
     assert all(ok.values()), (cal.values, NUISANCE)
-    true_error = compare(m, ComparisonModel().with_drivetrain(NUISANCE), reference=ref).error_db["total"]
+    true_error = compare(m, ComparisonModel().with_drivetrain(NUISANCE), reference=ref).raw_error_db["total"]
     assert cal.error_db < cal.error_before_db and cal.error_db <= true_error + 0.05, (cal.error_db, true_error)
     assert set(cal.to_dict()["parameters"]) == set(NUISANCE)
 
@@ -201,7 +199,9 @@ def test_calibration_lets_transmission_path_halve_the_error():
                   calibration=c0.calibration)
     top = a.candidates[0]
     assert top.effect == "transmission_path" and top.claimed, [(x.effect, x.reduction) for x in a.candidates[:3]]
+    # as `gearpit compare --add` does: the effect with its parameters and the nuisances they were fitted with
     model1 = model.with_effect(EffectSpec.from_dict({"name": top.effect, **top.params}).build())
+    model1 = model1.with_drivetrain(top.nuisance) if top.nuisance else model1
     c1 = calibrated_compare(m, model1, reference=ref, calibrate_nuisances=True)
     assert c1.error_db["total"] <= 0.5 * c0.error_db["total"], (c1.error_db["total"], c0.error_db["total"])
     ok, text = check_fit(ex, top.params)

@@ -29,8 +29,8 @@ def rig(tmp_path_factory):
 
 
 def test_loop_compare_add_and_watch_the_error_fall(rig, capsys):
-    """Run 1 (nuisances calibrated) ranks pitch_error first; run 2 (--add pitch_error, parameters taken from the
-    ledger, calibrated again) cuts the total error by more than half; the ledger has both rows with the
+    """Run 1 (nuisances calibrated) ranks pitch_error first; run 2 (--add pitch_error, parameters and the
+    nuisances they were fitted with taken from the ledger, calibrated again) cuts the total error by more than half; the ledger has both rows with the
     calibrated nuisances; the JSON validates against the schema; the HTML embeds its figures (no external
     src)."""
     assert main(["compare", str(rig / "rig.csv"), "--candidates", "pitch_error,eccentricity_wheel", "--calibrate",
@@ -50,6 +50,13 @@ def test_loop_compare_add_and_watch_the_error_fall(rig, capsys):
     assert [r["run"] for r in rows] == [1, 2]
     assert rows[1]["error_db"]["total"] < 0.5 * rows[0]["error_db"]["total"]
     assert "pitch_error" in (rig / "rig.model.toml").read_text()
+    # --add took the nuisances pitch_error was fitted with into the model's drive train (the calibration's start)
+    from compare.model import ComparisonModel
+
+    nuisance = doc["attribution"]["candidates"][0]["nuisance"]
+    assert set(nuisance) == {"mesh_damping_ratio", "bearing_n_per_m", "bearing_damping_ratio"}
+    saved = ComparisonModel.load(rig / "rig.model.toml").tables["drivetrain"]
+    assert all(abs(saved[k] / v - 1) < 1e-9 for k, v in nuisance.items()), (saved, nuisance)
     html = (rig / "run2.html").read_text()
     assert html.count("data:image/png;base64,") >= 8 and 'src="http' not in html
     assert "Nuisance calibration" in html
