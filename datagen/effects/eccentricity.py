@@ -21,9 +21,9 @@ pressure angle turn, which shifts the mesh timing by up to
 ``r_b1 a / (a_w sin alpha_w)`` (0.016 of a base pitch for 150 um). That
 stiffness modulation, not the transmission error, makes the ``+/- fr``
 sidebands: on ``spur-gds`` at 1000 rpm and 50 N m with ``a = 50 um`` the
-``f_m +/- fr`` lines of the pinion-bearing acceleration are at -25 to -27 dB
-re the ``f_m`` line with it, -54 to -56 dB without it (pinion; wheel: -26 to
--29 dB against -68 to -69 dB). The transmission error alone is a
+``f_m +/- fr`` lines of the pinion-bearing acceleration are at -27 to -28 dB
+re the ``f_m`` line with it, -54 to -56 dB without it (pinion; wheel: -28 to
+-30 dB against -68 to -69 dB). The transmission error alone is a
 once-per-revolution error, slow compared with the drive train's torsion modes,
 so the gears simply turn by ``e / r_b`` to follow it and the tooth load barely
 changes.
