@@ -121,8 +121,11 @@ def results_tables(res: dict) -> str:
         out += [_row(kind, r["baselines"][kind]["test"]) for kind in KINDS] + [""]
     if "rig" in res:
         r = res["rig"]
+        pp = r.get("augment", {}).get("path_probability", 0.0)
+        aug = (f"; the CNNs train with the transmission-path augmentation in {pp:.0%} of the records".replace("%", " %")
+               if pp else "")
         out += [f"### One rig (rig.toml): in-domain ({r['n_train']} train, {r['n_test']} test; variant chosen on "
-                f"the validation split: **{r['cnn_choice']}**)", "", HEAD]
+                f"the validation split: **{r['cnn_choice']}**{aug})", "", HEAD]
         out += [_row(f"CNN {rep}", v["test"]) for rep, v in r["cnn"].items()]
         out += [_row(kind, r["baselines"][kind]["test"]) for kind in KINDS] + [""]
         for split, c in r.get("cross_condition", {}).items():
