@@ -144,9 +144,13 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
              f"{doc['gain_db']:+.2f} dB.</p>",
              *_calibration_html(doc.get("calibration")),
              "<h2>Error</h2>",
-             _table(["view", "error (dB)"], [[k, f"{v:.3f}"] for k, v in e.items()]),
-             "<p>Definition: weighted RMS of the residuals in dB after the gain fit and the noise floors "
-             "(module <code>compare.error</code>); 0 for identical signals.</p>",
+             _table(["view", "error (dB)", "raw error E (dB)", "noise error N (dB)"],
+                    [[k, f"{v:.3f}", f"{doc['raw_error_db'].get(k, float('nan')):.3f}",
+                      f"{doc['noise_error_db'].get(k, float('nan')):.3f}"] for k, v in e.items()]),
+             "<p>Definition: the raw error E is the weighted RMS of the residuals in dB after the gain fit and the "
+             "noise floors; the noise error N is E between the model record and itself with independent noise "
+             "draws at the measured floor; the error is the excess sqrt(max(0, E^2 - N^2)) (module "
+             "<code>compare.error</code>): 0 for identical signals, near 0 for a model at the noise floor.</p>",
              "<h2>Views: measured versus model</h2>",
              _img(plots.order_spectrum(comparison), "order spectrum"),
              _img(plots.location_levels(comparison, "order", "order view: mesh harmonics, sidebands, shaft orders"),

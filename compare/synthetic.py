@@ -118,3 +118,30 @@ def check_fit(example: HiddenExample, params: dict) -> tuple[bool, str]:
         return ok, f"{name}: fitted {fit:.4g}, true {true:.4g}, |diff| {abs(fit - true):.3g} <= {tol}"
     ratio = max(fit / true, true / fit) if fit > 0 else float("inf")
     return ratio <= tol, f"{name}: fitted {fit:.4g}, true {true:.4g}, ratio {ratio:.3g} <= {tol}"
+
+
+def run_hidden_case(name: str, *, calibrate: bool | None = None, candidates=None):
+    """The user's loop on the rig of :data:`HIDDEN_EXAMPLES` ``[name]``: compare the example's model (nuisances
+    calibrated when ``calibrate``; None: as the model says, off by default), attribute over ``candidates``
+    (default: every registered effect), add the best candidate with its fitted parameters (and, in calibrated
+    runs, the nuisances it was fitted with, as ``gearpit compare --add`` does) and compare again.
+
+    Returns ``(example, first comparison, attribution, second comparison)``.
+    """
+    from compare.attribution import attribute
+    from compare.calibration import calibrated_compare
+    from compare.comparison import prepare_reference
+    from datagen.effects import EffectSpec
+
+    m, ex = hidden_effect_measurement(name)
+    ref = prepare_reference(m)
+    model = ex.model()
+    c0 = calibrated_compare(m, model, reference=ref, calibrate_nuisances=calibrate)
+    a = attribute(ref, c0.model, c0.evaluation.residuals.residual_db, candidates=candidates,
+                  disagreements=c0.disagreements, calibration=c0.calibration)
+    top = a.candidates[0]
+    model1 = model.with_effect(EffectSpec.from_dict({"name": top.effect, **top.params}).build())
+    if top.nuisance:
+        model1 = model1.with_drivetrain(top.nuisance)
+    c1 = calibrated_compare(m, model1, reference=ref, calibrate_nuisances=calibrate)
+    return ex, c0, a, c1
