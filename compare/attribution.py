@@ -50,7 +50,8 @@ Errors: the fits minimise the raw error ``E`` (:mod:`compare.error`, step 6);
 a candidate's reported error and its reduction are the excess over the noise
 error (step 7), with the noise error ``N_v`` measured once on the current model
 (the baseline) and used for every candidate: ``N`` is a property of the
-measurement's noise, and one value for all keeps the ranking that of ``E``.
+measurement's noise, and one value for all keeps the ranking that of ``E``
+(exactly, as long as no view's ``E_v`` falls below its ``N_v``).
 
 The best-ranked effect is *claimed* when it lowers the total (excess) error by at
 least ``claim_reduction`` (fraction); one at a time, because once it is in
