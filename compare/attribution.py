@@ -26,8 +26,11 @@ Uncertainty: with ``E_min`` the best total error and ``N`` Kish's effective
 number of residuals (:func:`compare.error.effective_count`), the residuals are
 treated as Gaussian with variance ``E_min^2``, so ``N E^2 / E_min^2`` is a
 chi-square; the 1-sigma interval of a parameter is where the profile of the
-quadratic surrogate rises by 1: ``sigma_u^2 = (E_min^2 / N) (H^-1)_jj`` with
-``H`` the Hessian of ``E^2`` in the search coordinate. A non-positive
+chi-square rises by 1. With ``E^2 = E_min^2 + 1/2 du' H du`` (``H`` the Hessian
+of ``E^2`` in the search coordinate), ``chi^2 = chi^2_min + du' C^-1 du`` with
+``C^-1 = N H / (2 E_min^2)``, so ``sigma_u^2 = (2 E_min^2 / N) (H^-1)_jj``
+(for ``N`` residuals linear in ``u`` this is the least-squares variance;
+``tests/test_compare_attribution.py`` checks it by Monte Carlo). A non-positive
 curvature means the parameter is not identifiable from these views
 (``sigma = inf``); when only the joint surrogate is indefinite (two parameters
 trading off along a valley), the conditional value from a parabola along that
@@ -77,7 +80,8 @@ import numpy as np
 from compare.comparison import NOISE_DRAWS, Reference, evaluate, prepare_reference, simulate_model
 from compare.error import combine, effective_count, excess
 from compare.fitspace import CHAIN_EFFECTS, fit_space
-from compare.search import Search, Trial, line_sigma_u, quadratic, round_a, round_b, round_c, round_d
+from compare.search import (Search, Trial, line_sigma_u, quadratic, round_a, round_b, round_c, round_d,
+                            surrogate_sigma_u)
 from gearpit.errors import GearpitError, require
 
 
@@ -357,15 +361,7 @@ def _result(s: Search, base, ref: Reference, n_eff: float, disagreements) -> Can
     sigma = {}
     q = quadratic(s)
     for j, p in enumerate(s.space.params):
-        su = math.inf
-        if q is not None:
-            _, H, e2 = q
-            try:
-                hinv = np.linalg.inv(H)
-                if np.all(np.linalg.eigvalsh(H) > 0) and hinv[j, j] > 0:
-                    su = math.sqrt(best.error_db ** 2 / n_eff * hinv[j, j])
-            except np.linalg.LinAlgError:
-                pass
+        su = surrogate_sigma_u(q[1], j, best.error_db, n_eff) if q is not None else math.inf
         if not math.isfinite(su):
             su = _conditional_sigma_u(s, j, best, n_eff)
         sg = p.sigma_from_u(params[p.name], su)

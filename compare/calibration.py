@@ -60,7 +60,7 @@ The model's added noise is the same draw for every point (common random
 numbers), so the error is a smooth function of the parameters.
 
 Uncertainty: the conditional 1-sigma of each parameter (the others held) from
-the curvature of ``E^2`` along its last scan, ``sigma_u^2 = E_min^2 / (N 2a)``
+the curvature of ``E^2 ~ a du^2`` along its last scan, ``sigma_u^2 = E_min^2 / (N a)``
 with ``N`` Kish's effective number of the residuals of the calibrated views
 (as :mod:`compare.attribution` does for effect parameters); ``inf`` when that
 curvature is not positive (the views do not pin the parameter down,

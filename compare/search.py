@@ -189,9 +189,23 @@ def round_d(s: Search) -> list[Trial]:
 def line_sigma_u(offsets_u, error_db, best_error_db: float, n_eff: float) -> float:
     """1-sigma in the search coordinate of one parameter with the others held: the curvature of ``E^2`` of a
     parabola through the (at most 5) points nearest the best along that line, ``offsets_u`` from the best,
-    ``sigma_u^2 = E_min^2 / (N 2a)``; ``inf`` with fewer than 3 distinct points or no positive curvature."""
+    ``E^2 ~ a du^2 + ...`` gives ``sigma_u^2 = E_min^2 / (N a)`` (:mod:`compare.attribution`: the chi-square
+    ``N E^2 / E_min^2`` rises by 1); ``inf`` with fewer than 3 distinct points or no positive curvature."""
     pts = sorted(zip((float(d) for d in offsets_u), (float(e) for e in error_db)), key=lambda t: abs(t[0]))[:5]
     if len({round(d, 9) for d, _ in pts}) < 3:
         return math.inf
     a2 = np.polyfit([d for d, _ in pts], [e ** 2 for _, e in pts], 2)[0]
-    return math.sqrt(best_error_db ** 2 / (n_eff * 2 * a2)) if a2 > 0 else math.inf
+    return math.sqrt(best_error_db ** 2 / (n_eff * a2)) if a2 > 0 else math.inf
+
+
+def surrogate_sigma_u(H: np.ndarray, j: int, best_error_db: float, n_eff: float) -> float:
+    """1-sigma in the search coordinate of parameter ``j`` from the Hessian ``H`` of the quadratic surrogate of
+    ``E^2`` (:func:`quadratic`): ``sigma_u^2 = (2 E_min^2 / N) (H^-1)_jj`` (:mod:`compare.attribution`);
+    ``inf`` unless ``H`` is positive definite."""
+    try:
+        hinv = np.linalg.inv(H)
+        if np.all(np.linalg.eigvalsh(H) > 0) and hinv[j, j] > 0:
+            return math.sqrt(2.0 * best_error_db ** 2 / n_eff * hinv[j, j])
+    except np.linalg.LinAlgError:
+        pass
+    return math.inf
