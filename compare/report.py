@@ -22,7 +22,7 @@ from compare.error import location_weights
 from gearpit import __version__
 from gearpit.atomic import atomic_path
 
-SCHEMA_ID = "gearpit.compare/1"
+SCHEMA_ID = "gearpit.compare/2"
 
 
 def _num(v):

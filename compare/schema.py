@@ -5,6 +5,9 @@ are dB (20 log10 of amplitudes, 10 log10 of powers and of moment ratios, see
 :mod:`compare.views`); ``residual_db`` is measured minus model after the sensor
 gain fit and the noise floors (:mod:`compare.error`); ``null`` stands for a
 value that does not exist (a floor of a statistic, an unbounded uncertainty).
+
+Version 2 (``gearpit.compare/2``): ``error_db`` is the excess over the noise error, with ``raw_error_db`` (the
+version-1 ``error_db``) and ``noise_error_db`` beside it; candidates carry their raw and noise errors too.
 """
 from __future__ import annotations
 
@@ -14,14 +17,14 @@ _ERRORS = {"type": "object", "required": ["total"], "additionalProperties": {"ty
 
 SCHEMA = {
     "$schema": "https://json-schema.org/draft/2020-12/schema",
-    "$id": "gearpit.compare/1",
+    "$id": "gearpit.compare/2",
     "title": "gearpit model-versus-measurement comparison",
     "type": "object",
     "required": ["schema", "software_version", "measurement", "model", "gain_db", "calibration", "error_db",
                  "raw_error_db", "noise_error_db", "locations", "disagreements", "attribution", "ledger"],
     "additionalProperties": False,
     "properties": {
-        "schema": {"const": "gearpit.compare/1"},
+        "schema": {"const": "gearpit.compare/2"},
         "software_version": {"type": "string"},
         "measurement": {
             "type": "object",

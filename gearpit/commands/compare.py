@@ -21,7 +21,7 @@ def register(sub) -> None:
                    help="fit the mesh damping, bearing stiffness and bearing damping to the measurement before "
                         "the attribution (default: as the model's [calibration] enabled says, else off)")
     p.add_argument("--report", type=Path, help="write a self-contained HTML report")
-    p.add_argument("--json", type=Path, help="write the JSON document (schema gearpit.compare/1)")
+    p.add_argument("--json", type=Path, help="write the JSON document (schema gearpit.compare/2)")
     p.add_argument("--seed", type=int, default=0, help="seed of the noise matched to the measured floor")
     p.set_defaults(func=run)
 
