@@ -178,13 +178,15 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
             ps = ", ".join(f"{k}={_fmt(v)}" + (f" \u00b1 {_fmt(c['sigma'].get(k))}" if k in c["sigma"] else "")
                            for k, v in c["params"].items())
             rows.append([c["effect"], f"{100 * c['reduction']:.1f} %", _fmt(c["error_db"]), _fmt(c["baseline_error_db"]),
-                         ps, c["window"], "claimed" if c["claimed"] else "", c["signature"]])
+                         _fmt(c.get("worst_view_rise_db")), ps, c["window"], "claimed" if c["claimed"] else "",
+                         c["signature"]])
             cls.append("claimed" if c["claimed"] else "")
-        table = _table(["effect", "error reduction", "error after (dB)", "before (dB)", "fitted parameters (1 sigma)",
-                        "window", "", "signature"], rows, cls)
+        table = _table(["effect", "error reduction", "error after (dB)", "before (dB)", "worst view rise (dB)",
+                        "fitted parameters (1 sigma)", "window", "", "signature"], rows, cls)
         parts.append(table)
         parts.append(f"<p>{att['n_simulations']} simulations in {att['elapsed_s']:.1f} s. Sigma '-' means not "
-                     "identifiable from these views.</p>")
+                     "identifiable from these views. An effect is claimed when it lowers the error by 30 % or more "
+                     "and raises no view's error by more than 1 dB.</p>")
         if att["unexplained"]:
             parts.append("<p><b>Unexplained by every registered effect:</b></p><ul>"
                          + "".join(f"<li>{html.escape(u['text'])}</li>" for u in att["unexplained"]) + "</ul>")

@@ -35,7 +35,7 @@ def row(name: str, calibrate: bool) -> dict:
     return {"effect": name, "hidden": ex.effect, "error_before_db": e0, "raw_error_before_db": c0.raw_error_db["total"],
             "noise_error_db": c0.noise_error_db["total"], "best": top.effect, "claimed": top.claimed,
             "reduction": top.reduction, "error_after_db": e1, "ratio": e1 / e0 if e0 > 0 else float("nan"),
-            "params": top.params, "fit": fit_text, "ranks_first_and_claimed": first, "halves": e1 <= 0.5 * e0,
+            "params": top.params, "sigma": top.sigma, "worst_view_rise_db": top.worst_view_rise_db, "fit": fit_text, "ranks_first_and_claimed": first, "halves": e1 <= 0.5 * e0,
             "fit_ok": ok_fit, "seconds": time.perf_counter() - t0}
 
 

@@ -227,3 +227,28 @@ def test_sigma_is_the_least_squares_spread():
     cond_u = s / np.sqrt(np.sum(a * a))
     assert abs(np.mean(line_sig) / cond_u - 1) < 0.12, (np.mean(line_sig), cond_u)
     assert abs(np.mean(quad_sig) / np.std(est_v) - 1) < 0.12, (np.mean(quad_sig), np.std(est_v))
+
+
+def test_claim_needs_the_reduction_and_no_view_traded():
+    """choose_claim: the best candidate above the claim threshold whose views all stay within
+    max_view_rise_db of the baseline's; a candidate that fits one view by spoiling another (the mains-hum
+    case: band 7.1 -> 3.1 dB, order 0.7 -> 3.3 dB) is passed over; nothing below the threshold is claimed."""
+    from compare.attribution import AttributionSettings, CandidateResult, choose_claim
+
+    base = {"order": 0.66, "band": 7.07, "envelope": 0.68}
+
+    def cand(name, total, views):
+        return CandidateResult(name, "", {}, {}, total, 3.19, dict(views), "2 s", 1, baseline_view_error_db=base)
+
+    settings = AttributionSettings()
+    trader = cand("transmission_path", 2.19, {"order": 3.26, "band": 3.07, "envelope": 0.40})
+    honest = cand("pitch_error", 2.20, {"order": 0.60, "band": 3.30, "envelope": 0.60})
+    weak = cand("tip_relief", 3.10, {"order": 0.60, "band": 6.90, "envelope": 0.60})
+    assert trader.worst_view_rise_db == pytest.approx(2.60) and honest.worst_view_rise_db <= 0.0
+    ranked = sorted([trader, weak], key=lambda c: -c.reduction)
+    assert choose_claim(ranked, settings) is None and not any(c.claimed for c in ranked)
+    ranked = sorted([cand("transmission_path", 2.19, trader.view_error_db), honest, weak], key=lambda c: -c.reduction)
+    assert [c.effect for c in ranked][:2] == ["transmission_path", "pitch_error"]     # the trader ranks first
+    assert choose_claim(ranked, settings).effect == "pitch_error" and not ranked[0].claimed
+    # the same trade within the allowed rise is claimed
+    assert choose_claim([trader], AttributionSettings(max_view_rise_db=3.0)).effect == "transmission_path"
