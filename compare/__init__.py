@@ -6,7 +6,7 @@
 - ``spectra``       order-domain records (pinion and wheel angle), power and envelope spectra, noise floors
 - ``plan``          the named physical locations of a comparison, fixed once from the measurement
 - ``views``         order, band, envelope, TSA and statistics views: levels (dB) at the plan's locations
-- ``error``         sensor gain fit, noise floors, residuals, the scalar error per view and in total
+- ``error``         sensor gain fit, noise floors, residuals, the scalar error per view and in total (raw, noise, excess)
 - ``model``         the comparison model (TOML the user edits): drive train, effects, plugins -> simulation cases
 - ``comparison``    one comparison end to end (measurement + model -> :class:`Comparison`), noise matching
 - ``calibration``   the drive-train nuisances (damping, bearing stiffness) fitted to the measurement first

@@ -7,7 +7,7 @@
 - ``profile_error``     profile slope + sinusoidal form deviation from an ISO 1328 grade (tooth deviation)
 - ``pitch_error``       cumulative + single-tooth pitch deviation from an ISO 1328 grade (tooth deviation)
 - ``tip_relief``        linear / parabolic tip relief (tooth deviation)
-- ``eccentricity``      run-out of the pinion or of the wheel (``eccentricity_pinion``/``_wheel``; angle deviation)
+- ``eccentricity``      run-out of the pinion or of the wheel (``eccentricity_pinion``/``_wheel``; angle deviation and moving centre)
 - ``speed_fluctuation`` sinusoidal input speed fluctuation (operating point)
 - ``torque_fluctuation`` sinusoidal load torque ripple (operating point)
 - ``hertz_nonlinear``   load-dependent Hertz contact stiffness at the mean load (mesh stiffness)
