@@ -236,6 +236,13 @@ class MeshStiffness:
         pitted pair's slice stiffness is its nominal one scaled by the ratio of healthy stiffnesses (the pit
         is taken where it was). Returns ``(n * ppc, n_slots + 1)``: the last column holds the pair that
         enters one cycle early (engagement ``cycle + 1``) when the contact starts before its nominal start.
+
+        Known limit: with linear interpolation between grid points, an edge at a fractional position
+        spreads over two grid steps instead of one, which smooths the stiffness steps and lowers the
+        high-frequency content. Measured on ``spur-gds`` at 1000 rpm, 50 N m: with the default 64 positions
+        per cycle a 10 um pinion eccentricity lowers the housing RMS by 7 % (30 um: 14 %); with 256 positions
+        by 1 %. Compare records on one grid, and use a finer grid (``[stiffness] positions_per_cycle``) when
+        the high mesh harmonics matter.
         """
         pair, ppc, S, P = self.pair, self.positions_per_cycle, self.n_slots, self.period_cycles
         dx = np.asarray(dx_m, dtype=float).ravel()
