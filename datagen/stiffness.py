@@ -262,13 +262,10 @@ class MeshStiffness:
         end = pair.contact_end_m
         dg = rb1 * (alpha - alpha_w - beta)
         pc = pair_compliance(pair)
-        dw = pair.contact_face_width_m / self.n_slices
-        w = (np.arange(self.n_slices) + 0.5) * dw
-        shift = w * math.tan(pair.base_helix_angle_rad)
+        dw, _, shift = _slices(pair, self.n_slices)
         u = (np.arange(dx.size) % ppc) / ppc
         slots = np.arange(-1, S)                                                   # -1: the early pair
-        g0 = (pair.contact_start_m + (u[:, None, None] + slots[None, :, None]) * pair.base_pitch_m
-              - shift[None, None, :])                                             # nominal positions
+        g0 = _slot_positions(pair, u, slots, shift)                                # nominal positions
         g = g0 + dg[:, None, None]
         # Contact resolved below the grid: along one slice the nominal positions are A - shift + m h (m an
         # integer, h = p_bt / ppc); the nominal contact is m_s <= m <= m_e (point-sampled, as
@@ -276,7 +273,7 @@ class MeshStiffness:
         # by -dg; each edge is a ramp one step wide moved by that amount, so the fraction equals the nominal
         # contact for no offset and the mean number of pairs changes by exactly (A - A') / p_bt.
         h = pair.base_pitch_m / ppc
-        m = np.rint((u[:, None, None] + slots[None, :, None]) * ppc + 0 * shift[None, None, :])
+        m = np.rint((u[:, None, None] + slots[None, :, None]) * ppc)               # (n, S + 1, 1)
         m_s = np.ceil(shift / h - 1e-9)
         m_e = np.floor((end - pair.contact_start_m + shift) / h + 1e-9)
         d_start = ((start - pair.contact_start_m) - dg)[:, None, None] / h
@@ -321,6 +318,21 @@ class MeshStiffness:
             "contact_ratio_transverse": self.pair.contact_ratio_transverse,
             "contact_ratio_overlap": self.pair.contact_ratio_overlap,
         }
+
+
+def _slices(pair, n_slices: int):
+    """Width ``dw`` of a face-width slice, slice centres ``w`` and their shift along the line of action
+    ``w tan(beta_b)`` (helical stagger)."""
+    dw = pair.contact_face_width_m / n_slices
+    w = (np.arange(n_slices) + 0.5) * dw
+    return dw, w, w * math.tan(pair.base_helix_angle_rad)
+
+
+def _slot_positions(pair, u, slots, shift):
+    """Nominal contact position ``g`` (m from T1), shape ``(len(u), len(slots), len(shift))``, of the pair in
+    each slot at cycle fractions ``u``: ``A + (u + slot) p_bt - shift``."""
+    return (pair.contact_start_m + (u[:, None, None] + np.asarray(slots)[None, :, None]) * pair.base_pitch_m
+            - shift[None, None, :])
 
 
 def _normalise_pits(pair, pits) -> tuple[PitMap, ...]:
@@ -385,13 +397,10 @@ def mesh_stiffness(pair, *, pits=None, positions_per_cycle: int = 64, n_slices: 
     P = {frozenset(): z1, frozenset({"pinion"}): z1, frozenset({"wheel"}): z2}.get(frozenset(gears), math.lcm(z1, z2))
     pc = pair_compliance(pair)
     A, E_end, pb = pair.contact_start_m, pair.contact_end_m, pair.base_pitch_m
-    b_c = pair.contact_face_width_m
-    dw = b_c / n_slices
-    w = (np.arange(n_slices) + 0.5) * dw
-    shift = w * math.tan(pair.base_helix_angle_rad)
+    dw, w, shift = _slices(pair, n_slices)
     n_slots = int(math.floor(pair.contact_ratio_total)) + 2
     u = np.arange(positions_per_cycle) / positions_per_cycle
-    g = A + (u[:, None, None] + np.arange(n_slots)[None, :, None]) * pb - shift[None, None, :]
+    g = _slot_positions(pair, u, np.arange(n_slots), shift)
     eps = 1e-12 * pb
     in_contact = (g >= A - eps) & (g <= E_end + eps)
     g = np.where(in_contact, g, np.nan)
