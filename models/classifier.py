@@ -2,7 +2,10 @@
 
 Prediction averages the class probabilities (and the severity) over ``n_crops``
 segments at evenly spaced positions of each record (test-time crops), without
-augmentation; all on the CPU.
+augmentation; all on the CPU. The crops of a record are represented together
+(:func:`~models.representations.represent_crops`: the work that does not depend
+on the crop is done once) and go through the network in one pass with the other
+records of their batch.
 """
 from __future__ import annotations
 
@@ -15,7 +18,7 @@ from gearpit.errors import require
 from models.cnn import GearCNN
 from models.data import SignalSet
 from models.operating import n_operating, operating_features
-from models.representations import represent
+from models.representations import represent_crops
 from models.spec import ModelSpec, Predictions, check_input
 
 
@@ -29,17 +32,29 @@ def build_network(spec: ModelSpec) -> GearCNN:
                    n_side=n_operating(spec.operating_inputs))
 
 
-def representation_batches(data: SignalSet, spec: ModelSpec, *, starts: float, batch_size: int = 256):
-    """Yield ``(slice, tensor, side)`` of the representation of ``data`` in batches; ``side`` is the
-    tensor of side inputs (:mod:`models.operating`) or None."""
+def crop_starts(n_crops: int) -> tuple[float, ...]:
+    """Starts of the ``n_crops`` test-time crops, fractions of the free room: the centre for one crop,
+    else evenly spaced from 0 to 1."""
+    require(isinstance(n_crops, int) and n_crops >= 1, "n_crops", n_crops, "an integer >= 1")
+    return (0.5,) if n_crops == 1 else tuple(float(v) for v in np.linspace(0.0, 1.0, n_crops))
+
+
+def representation_batches(data: SignalSet, spec: ModelSpec, *, crops: tuple[float, ...], batch_size: int = 256):
+    """Yield ``(slice, tensor, side)`` for batches of ``batch_size`` records of ``data``: the tensor holds
+    the representation of each record at each start of ``crops``, ``(records * len(crops), channels,
+    length)``, record by record (the crops of a record adjacent); ``side`` the side inputs
+    (:mod:`models.operating`) repeated for every crop, or None."""
     rep = spec.representation_spec()
     fr, mc = data.shaft_hz(), data.mesh_cps()
     side = operating_features(data, spec.operating_inputs) if spec.operating_inputs else None
+    k = len(crops)
     for i0 in range(0, len(data), batch_size):
         sl = slice(i0, min(i0 + batch_size, len(data)))
-        x = represent(data.signals[sl], rep, fs_hz=data.fs_hz, shaft_hz=None if fr is None else fr[sl],
-                      mesh_cps=None if mc is None else mc[sl], z_pinion=data.pair.z_pinion or None, starts=starts)
-        yield sl, torch.from_numpy(x), None if side is None else torch.from_numpy(side[sl])
+        x = represent_crops(data.signals[sl], rep, fs_hz=data.fs_hz, crops=crops,
+                            shaft_hz=None if fr is None else fr[sl], mesh_cps=None if mc is None else mc[sl],
+                            z_pinion=data.pair.z_pinion or None)
+        x = torch.from_numpy(x.reshape(-1, *x.shape[2:]))
+        yield sl, x, None if side is None else torch.from_numpy(np.repeat(side[sl], k, axis=0))
 
 
 @dataclass
@@ -53,26 +68,31 @@ class CNNClassifier:
                 batch_size: int = 256, threads: int = 1) -> Predictions:
         """Predictions for every record of ``data`` (checked first, see :func:`models.spec.check_input`).
 
-        ``threads``: torch CPU threads (1 or 2).
+        ``batch_size``: segments per network pass (records x crops; the crops of a record are represented
+        together and go through the network in the same pass; a larger pass was measured slower, its
+        activations falling out of the cache); ``threads``: torch CPU threads (1 or 2).
         """
-        require(isinstance(n_crops, int) and n_crops >= 1, "n_crops", n_crops, "an integer >= 1")
+        starts = crop_starts(n_crops)
         require(threads in (1, 2), "threads", threads, "1 or 2")
         torch.set_num_threads(threads)
         warnings = check_input(self.spec, data, allow_mismatch=allow_mismatch)
-        n = len(data)
+        n, k = len(data), len(starts)
         p_sev = np.zeros((n, len(self.spec.severity_classes)))
         p_teeth = np.zeros((n, len(self.spec.teeth_classes)))
         sev = np.zeros(n)
-        starts = [0.5] if n_crops == 1 else list(np.linspace(0.0, 1.0, n_crops))
         self.network.eval()
-        with torch.no_grad():
-            for st in starts:
-                for sl, x, side in representation_batches(data, self.spec, starts=st, batch_size=batch_size):
-                    out = self.network(x, side)
-                    p_sev[sl] += torch.softmax(out["severity_class"], dim=1).numpy()
-                    p_teeth[sl] += torch.softmax(out["teeth"], dim=1).numpy()
-                    sev[sl] += out["severity"].numpy()
-        k = len(starts)
+        with torch.inference_mode():
+            for sl, x, side in representation_batches(data, self.spec, crops=starts,
+                                                      batch_size=max(1, batch_size // k)):
+                out = self.network(x, side)
+                b = sl.stop - sl.start
+                ps = torch.softmax(out["severity_class"], dim=1).numpy().reshape(b, k, -1)
+                pt = torch.softmax(out["teeth"], dim=1).numpy().reshape(b, k, -1)
+                s = out["severity"].numpy().reshape(b, k)
+                for c in range(k):  # summed crop by crop, in order
+                    p_sev[sl] += ps[:, c]
+                    p_teeth[sl] += pt[:, c]
+                    sev[sl] += s[:, c]
         severity = np.clip(sev / k * self.spec.severity_scale, 0.0, None)
         return Predictions(list(self.spec.severity_classes), list(self.spec.teeth_classes), p_sev / k,
                            p_teeth / k, severity, warnings)

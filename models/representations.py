@@ -4,7 +4,8 @@ Every record is first normalised (zero mean, unit standard deviation). Each
 representation then reads *segments* of it and returns a fixed-size array
 ``(channels, length)``. Where the first segment starts is a fraction of the free
 room, so a random start is the "random phase / crop" augmentation and evenly
-spaced starts are test-time crops. The spectra average the power of every
+spaced starts are test-time crops (:func:`represent_crops` computes them together,
+sharing what does not depend on the start). The spectra average the power of every
 half-overlapping segment that fits in the record (Welch [4]_), and the TSA
 averages every whole revolution that fits (less one, the room for the start
 phase; at least ``n_revs``): a longer record gives a less noisy input of the
@@ -164,21 +165,23 @@ def _standardise(v: np.ndarray) -> np.ndarray:
     return (v - v.mean()) / sd if sd > 0 else v - v.mean()
 
 
-def _hann_amplitude(seg: np.ndarray) -> np.ndarray:
-    w = np.hanning(seg.size + 1)[:-1]  # periodic Hann
-    return 2.0 * np.abs(np.fft.rfft(seg * w)) / w.sum()
+def _hann_amplitude(segs: np.ndarray) -> np.ndarray:
+    """Hann amplitude spectrum of each segment (last axis)."""
+    w = np.hanning(segs.shape[-1] + 1)[:-1]  # periodic Hann
+    return 2.0 * np.abs(np.fft.rfft(segs * w, axis=-1)) / w.sum()
 
 
-def _envelope(seg: np.ndarray) -> np.ndarray:
-    n = seg.size
-    spec = np.fft.fft(seg)
+def _envelope(segs: np.ndarray) -> np.ndarray:
+    """Hilbert envelope of each segment (last axis), less its mean."""
+    n = segs.shape[-1]
+    spec = np.fft.fft(segs, axis=-1)
     gain = np.zeros(n)
     gain[0] = 1.0
     gain[1:(n + 1) // 2] = 2.0
     if n % 2 == 0:
         gain[n // 2] = 1.0
-    e = np.abs(np.fft.ifft(spec * gain))
-    return e - e.mean()
+    e = np.abs(np.fft.ifft(spec * gain, axis=-1))
+    return e - e.mean(axis=-1, keepdims=True)
 
 
 def _log_on_grid(amp: np.ndarray, bin_units: float, length: int, step: float) -> np.ndarray:
@@ -206,46 +209,64 @@ def _starts(size: int, n_seg: int, start: float, average: bool) -> list[int]:
     return list(range(first, room + 1, hop))
 
 
-def _mean_amplitude(x: np.ndarray, n_seg: int, starts: list[int], envelope: bool) -> np.ndarray:
-    """Root-mean-square over the segments of the Hann amplitude spectrum (of the envelope if asked)."""
-    power = 0.0
-    for i0 in starts:
-        seg = x[i0:i0 + n_seg]
-        power = power + _hann_amplitude(_envelope(seg) if envelope else seg - seg.mean()) ** 2
-    return np.sqrt(power / len(starts))
+def _mean_amplitudes(x: np.ndarray, n_seg: int, crop_starts: list[list[int]], envelope: bool) -> np.ndarray:
+    """Root-mean-square over each crop's segments of the Hann amplitude spectrum (of the envelope if asked):
+    ``(n_crops, n_seg // 2 + 1)``. A segment shared by several crops is transformed once, and all in one
+    call (one FFT plan per record)."""
+    unique = sorted({i0 for starts in crop_starts for i0 in starts})
+    row = {i0: r for r, i0 in enumerate(unique)}
+    segs = np.stack([x[i0:i0 + n_seg] for i0 in unique])
+    power = _hann_amplitude(_envelope(segs) if envelope else segs - segs.mean(axis=-1, keepdims=True)) ** 2
+    out = np.empty((len(crop_starts), power.shape[1]))
+    for c, starts in enumerate(crop_starts):
+        total = 0.0
+        for i0 in starts:  # summed segment by segment, in order
+            total = total + power[row[i0]]
+        out[c] = np.sqrt(total / len(starts))
+    return out
 
 
-def _one(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, shaft_hz: float | None, mesh_cps: float | None,
-         start: float, speed_factor: float, z_pinion: int) -> np.ndarray:
+def _crops(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, shaft_hz: float | None, mesh_cps: float | None,
+           starts: tuple[float, ...], speed_factor: float, z_pinion: int) -> np.ndarray:
+    """Representation of one record at every start of ``starts``: ``(len(starts), n_channels, length)``.
+
+    The work that does not depend on the start (normalisation, the stretched record of ``envelope``,
+    the FFT plan of a segment length) is done once for all crops.
+    """
     x = _normalise(x.astype(float))
     k = spec.kind
     n_seg = spec.segment_length(fs_hz, shaft_hz, mesh_cps, speed_factor)
     if k == "raw":
-        i0 = _starts(x.size, n_seg, start, False)[0]
-        seg = x[i0:i0 + n_seg]
-        return _normalise(resample(seg, spec.n_samples) if n_seg != spec.n_samples else seg)[None, :]
+        out = []
+        for st in starts:
+            i0 = _starts(x.size, n_seg, st, False)[0]
+            seg = x[i0:i0 + n_seg]
+            out.append(_normalise(resample(seg, spec.n_samples) if n_seg != spec.n_samples else seg)[None, :])
+        return np.stack(out)
     if k == "envelope":
         if n_seg != spec.n_samples:  # speed error: stretch the record, then cut as usual
             x = resample(x, int(round(x.size * spec.n_samples / n_seg)))
-        amp = _mean_amplitude(x, spec.n_samples, _starts(x.size, spec.n_samples, start, True), True)
-        return _standardise(np.log10(amp[:spec.length] + LOG_FLOOR))[None, :]
+        amp = _mean_amplitudes(x, spec.n_samples, [_starts(x.size, spec.n_samples, st, True) for st in starts], True)
+        return np.stack([_standardise(np.log10(a[:spec.length] + LOG_FLOOR))[None, :] for a in amp])
     if k == "tsa":
         # as many whole revolutions as the record holds, less one (room for the start phase), >= n_revs
         rev = fs_hz / (shaft_hz * speed_factor)
         n_rev = max(spec.n_revs, int(np.floor(x.size / rev)) - 1)
         n_seg = min(int(round(n_rev * rev)), x.size)
-        i0 = _starts(x.size, n_seg, start, False)[0]
-        spec_c = np.fft.rfft(x[i0:i0 + n_seg])
+        i0s = [_starts(x.size, n_seg, st, False)[0] for st in starts]
+        spec_c = np.fft.rfft(np.stack([x[i0:i0 + n_seg] for i0 in i0s]), axis=-1)  # one FFT plan for all crops
         # bin j of the segment is shaft order j / (revolutions it holds): keep the integer orders
         bins = np.arange(spec.samples_per_rev // 2 + 1) * (n_seg / rev)
-        idx = np.arange(spec_c.size)
-        comb = np.interp(bins, idx, spec_c.real, right=0.0) + 1j * np.interp(bins, idx, spec_c.imag, right=0.0)
-        avg = np.fft.irfft(comb, n=spec.samples_per_rev)
-        diff = np.fft.irfft(comb * _difference_mask(comb.size, z_pinion), n=spec.samples_per_rev)
+        idx = np.arange(spec_c.shape[1])
+        comb = np.stack([np.interp(bins, idx, c.real, right=0.0) + 1j * np.interp(bins, idx, c.imag, right=0.0)
+                         for c in spec_c])
+        avg = np.fft.irfft(comb, n=spec.samples_per_rev, axis=-1)
+        diff = np.fft.irfft(comb * _difference_mask(comb.shape[1], z_pinion), n=spec.samples_per_rev, axis=-1)
         # both scaled by the TSA's standard deviation: the difference keeps its level relative to the mesh tone
-        sd = avg.std()
-        sd = sd if sd > 0 else 1.0
-        return np.stack([(avg - avg.mean()) / sd, (diff - diff.mean()) / sd])
+        sd = avg.std(axis=-1, keepdims=True)
+        sd = np.where(sd > 0, sd, 1.0)
+        return np.stack([(avg - avg.mean(axis=-1, keepdims=True)) / sd,
+                         (diff - diff.mean(axis=-1, keepdims=True)) / sd], axis=1)
     if k == "order":
         # bin j of the segment is shaft order j * (revolutions in the segment)^-1
         unit = 1.0 / (n_seg * (shaft_hz * speed_factor) / fs_hz)
@@ -253,10 +274,11 @@ def _one(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, shaft_hz: float 
     else:
         unit = 1.0 / (n_seg * mesh_cps * speed_factor)
         step = 1.0 / spec.n_mesh_periods
-    starts = _starts(x.size, n_seg, start, True)
-    a = _log_on_grid(_mean_amplitude(x, n_seg, starts, False), unit, spec.length, step)
-    e = _log_on_grid(_mean_amplitude(x, n_seg, starts, True), unit, spec.length, step)
-    return np.stack([a, e])
+    crop_starts = [_starts(x.size, n_seg, st, True) for st in starts]
+    amp = _mean_amplitudes(x, n_seg, crop_starts, False)
+    env = _mean_amplitudes(x, n_seg, crop_starts, True)
+    return np.stack([np.stack([_log_on_grid(a, unit, spec.length, step), _log_on_grid(e, unit, spec.length, step)])
+                     for a, e in zip(amp, env)])
 
 
 def _per_record(value, n: int, field: str) -> np.ndarray | None:
@@ -331,21 +353,67 @@ def represent(signals: np.ndarray, spec: RepresentationSpec, *, fs_hz: float, sh
         Where each segment starts, as a fraction in [0, 1] of the free room.
     speed_factors : float or array_like
         Speed error factors (see the module docstring); 1 = none.
+
+    See Also
+    --------
+    represent_crops : several starts per record (test-time crops), sharing the work between them.
     """
     x = np.asarray(signals)
     require(x.ndim == 2 and x.shape[0] >= 1, "signals", x.shape, "a 2-D array (records, samples)")
+    st = _per_record(starts, x.shape[0], "starts")
+    return _represent(x, spec, fs_hz, shaft_hz, mesh_cps, z_pinion, st[:, None], speed_factors)[:, 0]
+
+
+def represent_crops(signals: np.ndarray, spec: RepresentationSpec, *, fs_hz: float, crops, shaft_hz=None,
+                    mesh_cps=None, z_pinion: int | None = None, speed_factors=1.0) -> np.ndarray:
+    """Representation of every record at every start of ``crops`` (test-time crops): array
+    ``(n_records, len(crops), spec.n_channels, spec.length)``, float32.
+
+    Element ``[:, c]`` equals ``represent(..., starts=crops[c])`` bit for bit; the work that does not
+    depend on the start (normalisation, the stretched record of ``envelope``, the FFT plan of the
+    segment length, Welch segments shared by two crops) is done once per record.
+
+    Parameters
+    ----------
+    crops : sequence of float
+        Segment starts, fractions in [0, 1] of the free room, the same for every record.
+    signals, spec, fs_hz, shaft_hz, mesh_cps, z_pinion, speed_factors
+        As in :func:`represent`.
+
+    Examples
+    --------
+    >>> from models.toy import toy_signal_set
+    >>> d = toy_signal_set(n_per_class=1)
+    >>> spec = RepresentationSpec(kind="tsa", n_revs=4, samples_per_rev=256)
+    >>> r = represent_crops(d.signals, spec, fs_hz=d.fs_hz, crops=(0.0, 1.0), shaft_hz=d.shaft_hz(), z_pinion=13)
+    >>> r.shape
+    (3, 2, 2, 256)
+    >>> bool(np.array_equal(r[:, 1], represent(d.signals, spec, fs_hz=d.fs_hz, shaft_hz=d.shaft_hz(),
+    ...                                        z_pinion=13, starts=1.0)))
+    True
+    """
+    x = np.asarray(signals)
+    require(x.ndim == 2 and x.shape[0] >= 1, "signals", x.shape, "a 2-D array (records, samples)")
+    st = np.asarray(crops, dtype=float)
+    require(st.ndim == 1 and st.size >= 1, "crops", st.shape, "a sequence of at least one fraction")
+    return _represent(x, spec, fs_hz, shaft_hz, mesh_cps, z_pinion, np.broadcast_to(st, (x.shape[0], st.size)),
+                      speed_factors)
+
+
+def _represent(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, shaft_hz, mesh_cps, z_pinion,
+               starts: np.ndarray, speed_factors) -> np.ndarray:
+    """Checked inputs -> ``(n_records, n_crops, channels, length)``; ``starts``: ``(n_records, n_crops)``."""
     n = x.shape[0]
     fr = _per_record(shaft_hz, n, "shaft_hz")
     mc = _per_record(mesh_cps, n, "mesh_cps")
-    st = _per_record(starts, n, "starts")
     sf = _per_record(speed_factors, n, "speed_factors")
-    require(bool(np.all((st >= 0) & (st <= 1))), "starts", "outside [0, 1]", "fractions in [0, 1]")
+    require(bool(np.all((starts >= 0) & (starts <= 1))), "starts", "outside [0, 1]", "fractions in [0, 1]")
     require(bool(np.all(sf > 0)), "speed_factors", "non-positive", "factors > 0")
     check_inputs(spec, x.shape[1], fs_hz, fr, mc, z_pinion=z_pinion,
                  max_speed_factor=float(max(sf.max(), 1.0 / sf.min())))
-    out = np.empty((n, spec.n_channels, spec.length), dtype=np.float32)
+    out = np.empty((n, starts.shape[1], spec.n_channels, spec.length), dtype=np.float32)
     z = int(z_pinion) if z_pinion is not None else 0
     for i in range(n):
-        out[i] = _one(x[i], spec, float(fs_hz), None if fr is None else fr[i], None if mc is None else mc[i],
-                      float(st[i]), float(sf[i]), z)
+        out[i] = _crops(x[i], spec, float(fs_hz), None if fr is None else fr[i], None if mc is None else mc[i],
+                        tuple(float(v) for v in starts[i]), float(sf[i]), z)
     return out
