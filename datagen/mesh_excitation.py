@@ -2,10 +2,12 @@
 
 From a :class:`datagen.stiffness.MeshStiffness` and the case's effects
 (hook 1 modifies the stiffness, hooks 2a/2b give deviations, hook 2c moving
-centres: :meth:`datagen.stiffness.MeshStiffness.slots_at_centre_offset`), build one record
+centres: :func:`datagen.centre_offset.slots_at_centre_offset`), build one record
 over ``period_cycles`` mesh cycles (the least common multiple of the stiffness
 period and of every effect's ``deviation_period_cycles``, then reduced to the
-smallest period the samples actually have: 1 cycle for a healthy pair):
+smallest period the samples actually have: 1 cycle for a healthy pair), on the
+stiffness's position grid, or with hook 2c on :data:`datagen.centre_offset.SUBDIVISIONS`
+points per grid step (the nominal record's linear interpolation when nothing moves):
 
 - ``k`` (N/m): total mesh stiffness;
 - ``error_force`` E (N) = sum over slices of ``k_slice * e``, so the linear mesh
@@ -22,6 +24,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+
+from datagen.centre_offset import SUBDIVISIONS, refine_slots, slots_at_centre_offset
 
 
 @dataclass(frozen=True, eq=False)
@@ -79,11 +83,14 @@ def mesh_record(stiffness, effects, ctx) -> MeshRecord:
     P = P0
     for e in tooth_fx + angle_fx + centre_fx:
         P = math.lcm(P, int(e.deviation_period_cycles(ctx)))
-    x = np.arange(P * ppc) / ppc
+    # hook 2c: the record on SUBDIVISIONS points per grid step, so that sub-step moves of the contact edges keep
+    # the nominal edge ramps (datagen.centre_offset)
+    q = SUBDIVISIONS if centre_fx else 1
+    x = np.arange(P * ppc * q) / (ppc * q)
     th1, th2 = 2 * np.pi * x / z1, 2 * np.pi * x / z2
-    if centre_fx:   # hook 2c: the pair at the moving centres (one more slot: an early entry)
+    if centre_fx:   # the pair at the moving centres (one more slot: an early entry)
         offs = [np.broadcast_to(np.asarray(e.centre_offset_m(th1, th2, ctx), float), (2,) + x.shape) for e in centre_fx]
-        k_slots = stiffness.slots_at_centre_offset(sum(o[0] for o in offs), sum(o[1] for o in offs))
+        k_slots = slots_at_centre_offset(stiffness, sum(o[0] for o in offs), sum(o[1] for o in offs), subdivisions=q)
     else:
         k_slots = np.tile(stiffness.k_slots_n_per_m[:P0 * ppc], (P // P0, 1))
     if tooth_fx:
@@ -91,8 +98,8 @@ def mesh_record(stiffness, effects, ctx) -> MeshRecord:
             return sum(e.tooth_deviation_m(g, pt, wt, ctx) for e in tooth_fx)
 
         e_force_slots = stiffness.weighted(f, n_cycles=P)
-        # with hook 2c the deviations are those of the nominal contact positions; the early pair has none
-        e_force_slots = np.pad(e_force_slots, ((0, 0), (0, k_slots.shape[1] - e_force_slots.shape[1])))
+        if centre_fx:   # the deviations of the nominal contact positions; the early pair has none before its start
+            e_force_slots = refine_slots(e_force_slots, ppc, q)
     else:
         e_force_slots = np.zeros_like(k_slots)
     if angle_fx:
@@ -101,9 +108,9 @@ def mesh_record(stiffness, effects, ctx) -> MeshRecord:
     with np.errstate(invalid="ignore", divide="ignore"):
         e_slots = np.where(k_slots > 0, e_force_slots / k_slots, 0.0)
     k, E = k_slots.sum(axis=1), e_force_slots.sum(axis=1)
-    P_min = minimal_period(P, ppc, k, E)
-    n = P_min * ppc
-    return MeshRecord(period_cycles=P_min, positions_per_cycle=ppc, k=k[:n], error_force=E[:n], k_slots=k_slots[:n],
+    P_min = minimal_period(P, ppc * q, k, E)
+    n = P_min * ppc * q
+    return MeshRecord(period_cycles=P_min, positions_per_cycle=ppc * q, k=k[:n], error_force=E[:n], k_slots=k_slots[:n],
                       e_slots=e_slots[:n])
 
 

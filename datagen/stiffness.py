@@ -208,89 +208,14 @@ class MeshStiffness:
         return replace(self, k_n_per_m=k_slots.sum(axis=1), k_slots_n_per_m=k_slots, _k_cycle=k_cycle,
                        _overrides=overrides)
 
-    def slots_at_centre_offset(self, dx_m, dy_m) -> np.ndarray:
-        """Pair stiffnesses at every position of a record whose wheel centre is displaced by ``(dx, dy)`` (m)
-        relative to the pinion centre (eccentricity, bearing play).
+    def slots_at_centre_offset(self, dx_m, dy_m, *, subdivisions: int = 1) -> np.ndarray:
+        """Pair stiffnesses at every point of a record whose wheel centre is displaced by ``(dx, dy)`` (m)
+        relative to the pinion centre (eccentricity, bearing play), on ``subdivisions`` points per position
+        step: :func:`datagen.centre_offset.slots_at_centre_offset` (geometry, sub-grid contact edges, the
+        measured effect of the grid)."""
+        from datagen.centre_offset import slots_at_centre_offset
 
-        Frame: ``x`` from the pinion centre towards the wheel centre, ``y`` such that the line of action
-        runs along ``(sin alpha_w, cos alpha_w)`` (from T1 to T2; T1 at polar angle ``-alpha_w`` on the
-        pinion base circle). ``dx_m``, ``dy_m`` have one value per position of a record of
-        ``n = len / ppc`` mesh cycles (engagement ``m = cycle - slot`` as in :meth:`weighted`). At each
-        position the pair is the rigid pair with its centres there (quasi-static geometry; an involute pair
-        stays conjugate, the transmission error of the displacement is hook 2b's):
-
-        - centre distance ``a' = |(a_w + dx, dy)|``, line of centres turned by ``beta = atan2(dy, a_w + dx)``,
-          working pressure angle ``alpha' = arccos((r_b1 + r_b2) / a')``;
-        - start of contact from T1 ``A' = a' sin(alpha') - sqrt(r_a2^2 - r_b2^2)`` (``dA ~ da / sin
-          alpha_w``); the end ``E = sqrt(r_a1^2 - r_b1^2)`` does not move;
-        - T1 moves on the pinion base circle to polar angle ``beta - alpha'``, so at a given pinion angle
-          every pinion tooth's contact position moves by ``r_b1 (alpha' - alpha_w - beta)``: the mesh timing
-          shifts.
-
-        A pair is in contact where its shifted position lies in ``[A', E]``, resolved below the position grid
-        (each edge of the nominal point-sampled contact is a ramp one grid step wide, moved by the offset's
-        change of that edge: the edges move continuously with the offset, not in steps of the grid, and no
-        offset gives the nominal contact); its healthy slice stiffness is
-        that of the shifted position (the compliance table, held at its end values outside the nominal
-        path: the wheel's roll offset and the flank below the nominal start are not re-tabulated). A
-        pitted pair's slice stiffness is its nominal one scaled by the ratio of healthy stiffnesses (the pit
-        is taken where it was). Returns ``(n * ppc, n_slots + 1)``: the last column holds the pair that
-        enters one cycle early (engagement ``cycle + 1``) when the contact starts before its nominal start.
-
-        Known limit: with linear interpolation between grid points, an edge at a fractional position
-        spreads over two grid steps instead of one, which smooths the stiffness steps and lowers the
-        high-frequency content. Measured on ``spur-gds`` at 1000 rpm, 50 N m: with the default 64 positions
-        per cycle a 10 um pinion eccentricity lowers the housing RMS by 7 % (30 um: 14 %); with 256 positions
-        by 1 %. Compare records on one grid, and use a finer grid (``[stiffness] positions_per_cycle``) when
-        the high mesh harmonics matter.
-        """
-        pair, ppc, S, P = self.pair, self.positions_per_cycle, self.n_slots, self.period_cycles
-        dx = np.asarray(dx_m, dtype=float).ravel()
-        dy = np.broadcast_to(np.asarray(dy_m, dtype=float).ravel(), dx.shape)
-        n_cycles, rem = divmod(dx.size, ppc)
-        if rem or n_cycles < 1:
-            raise ValueError(f"slots_at_centre_offset: {dx.size} values, need a whole number of cycles of {ppc}")
-        rb1, rb2 = pair.base_radius_m("pinion"), pair.base_radius_m("wheel")
-        a_w, alpha_w = pair.centre_distance_m, pair.working_pressure_angle_rad
-        a = np.hypot(a_w + dx, dy)
-        if np.any(a <= rb1 + rb2):
-            raise ValueError("slots_at_centre_offset: centre distance below the sum of the base radii")
-        # as differences from the nominal pair, so that no offset gives the nominal record bit for bit
-        alpha = alpha_w + (np.arccos((rb1 + rb2) / a) - math.acos((rb1 + rb2) / a_w))
-        beta = np.arctan2(dy, a_w + dx)
-        start = pair.contact_start_m + (a * np.sin(alpha) - a_w * math.sin(alpha_w))   # A' from T1
-        end = pair.contact_end_m
-        dg = rb1 * (alpha - alpha_w - beta)
-        pc = pair_compliance(pair)
-        dw, _, shift = _slices(pair, self.n_slices)
-        u = (np.arange(dx.size) % ppc) / ppc
-        slots = np.arange(-1, S)                                                   # -1: the early pair
-        g0 = _slot_positions(pair, u, slots, shift)                                # nominal positions
-        g = g0 + dg[:, None, None]
-        # Contact resolved below the grid: along one slice the nominal positions are A - shift + m h (m an
-        # integer, h = p_bt / ppc); the nominal contact is m_s <= m <= m_e (point-sampled, as
-        # mesh_stiffness). In those coordinates the offset moves the window's start by dA - dg and its end
-        # by -dg; each edge is a ramp one step wide moved by that amount, so the fraction equals the nominal
-        # contact for no offset and the mean number of pairs changes by exactly (A - A') / p_bt.
-        h = pair.base_pitch_m / ppc
-        m = np.rint((u[:, None, None] + slots[None, :, None]) * ppc)               # (n, S + 1, 1)
-        m_s = np.ceil(shift / h - 1e-9)
-        m_e = np.floor((end - pair.contact_start_m + shift) / h + 1e-9)
-        d_start = ((start - pair.contact_start_m) - dg)[:, None, None] / h
-        d_end = -dg[:, None, None] / h
-        frac = np.clip(m - (m_s + d_start) + 1.0, 0.0, 1.0) * np.clip((m_e + d_end) - m + 1.0, 0.0, 1.0)
-        frac = np.where(frac < 1e-12, 0.0, np.where(frac > 1.0 - 1e-12, 1.0, frac))
-        k_new = np.where(frac > 0, frac * dw / pc(np.where(frac > 0, g, pair.contact_start_m)), 0.0)
-        k = k_new[:, 1:]
-        if self._overrides:
-            k_nom = np.tile(self._k_cycle, (n_cycles, 1, 1))                        # (n, S, slices)
-            cyc = np.arange(dx.size) // ppc
-            for (m, s_), kk in self._overrides.items():
-                rows = np.nonzero((cyc - s_) % P == m)[0]
-                kn = k_nom[rows, s_]
-                ratio = np.divide(kk[rows % ppc], kn, out=np.ones_like(kn), where=kn > 0)
-                k[rows, s_] = k[rows, s_] * ratio
-        return np.concatenate([k.sum(axis=2), k_new[:, 0].sum(axis=1)[:, None]], axis=1)
+        return slots_at_centre_offset(self, dx_m, dy_m, subdivisions=subdivisions)
 
     @cached_property
     def repeat_cycles(self) -> int:

@@ -54,7 +54,7 @@ How to write an effect
    2c   ``centre_offset_m``         displacement (dx, dy)(theta1, theta2) (m) of the wheel centre
                                     relative to the pinion centre (eccentricity): moves the start
                                     of contact and the mesh timing
-                                    (:meth:`datagen.stiffness.MeshStiffness.slots_at_centre_offset`)
+                                    (:func:`datagen.centre_offset.slots_at_centre_offset`)
    3    ``generalized_force``       extra generalized forces (n_t, n_dof) on the nominal
                                     trajectory (unbalance, torque ripple); N or N m per DOF
    4    ``mesh_force_batch``        nonlinear mesh law F(delta, delta_dot) and its derivatives,
@@ -295,7 +295,7 @@ class Effect:
     def centre_offset_m(self, theta_pinion_rad: np.ndarray, theta_wheel_rad: np.ndarray,
                         ctx: EffectContext) -> np.ndarray:
         """Displacement ``(dx, dy)`` (m, shape ``(2, ...)``) of the wheel centre relative to the pinion centre as
-        a function of the shaft angles; frame of :meth:`datagen.stiffness.MeshStiffness.slots_at_centre_offset`
+        a function of the shaft angles; frame of :func:`datagen.centre_offset.slots_at_centre_offset`
         (``x`` along the line of centres, pinion to wheel)."""
         shape = np.broadcast(theta_pinion_rad, theta_wheel_rad).shape
         return np.zeros((2,) + shape)

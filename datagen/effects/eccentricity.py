@@ -12,7 +12,7 @@ force ``k(x) e(theta)`` carries ``+/- fr`` sidebands around every mesh
 harmonic. The radial run-out a ball probe reads is ``F_r = 2 a``
 (ISO 1328-2: ``F_r = 0.8 F_p`` at a grade, :mod:`datagen.effects.accuracy_grade`).
 
-Through the moving centre (hook 2c, :meth:`datagen.stiffness.MeshStiffness.slots_at_centre_offset`)
+Through the moving centre (hook 2c, :func:`datagen.centre_offset.slots_at_centre_offset`)
 it also changes the mesh itself, once per revolution: the centre distance
 varies by up to ``a``, which moves the start of contact by up to
 ``a / sin(alpha_w)`` (a contact-ratio modulation of ``a / (p_bt sin alpha_w)``:
