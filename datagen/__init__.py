@@ -8,6 +8,7 @@
 - ``photo``      pit masks extracted from a photo of a flank
 - ``compliance`` potential-energy tooth compliance terms (bending, shear, axial, fillet, Hertz)
 - ``stiffness``  time-varying mesh stiffness over a revolution, slices, pits
+- ``centre_offset``  the pair at moving centres (eccentricity, hook 2c), on subdivided grid steps
 - ``lumped_model``     DOFs, mass / stiffness / damping matrices of the drive train (spur 6 DOF, helical 8)
 - ``mesh_excitation``  stiffness + effect deviations -> the periodic mesh record a simulation reads
 - ``newmark``          batched average-acceleration Newmark with the rank-one mesh term (+ Newton)
