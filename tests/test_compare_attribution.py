@@ -1,7 +1,8 @@
 """Attribution on 'measurements' with a hidden effect (compare.attribution, compare.calibration, compare.synthetic).
 
 Reference: the issue's acceptance criteria. Each measurement is simulated with one effect the baseline model
-lacks, on a rig whose mesh/bearing damping, bearing stiffness, noise (SNR 30 dB) and sensor gain (x3.7) differ
+lacks, on a rig whose mesh/bearing damping, bearing stiffness, noise (SNR 30 dB; 40 dB for hertz_nonlinear,
+compare.synthetic.HIDDEN_EXAMPLES says why) and sensor gain (x3.7) differ
 from the comparison model's defaults (compare.synthetic.NUISANCE). For each registered effect (slow tests): it
 ranks first and is claimed; adding it with the fitted parameters cuts the total error by at least half; the
 checked parameter is within the tolerance of compare.synthetic.HIDDEN_EXAMPLES. Controls: no hidden effect ->
