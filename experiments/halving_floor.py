@@ -1,7 +1,7 @@
 """How far the exact truth gets: the floor under the hidden-effect test's "error at most half".
 
 Run: ``python experiments/halving_floor.py [NAME ...] [--torque T] [--seeds 3 4 5 6 7] [--snr-db DB]``
-(about 10 s per effect and seed on 2 cores).
+(on 2 cores about 10 s per effect and seed; an effect that needs time stepping, e.g. backlash, about 2.5 min).
 
 For a hidden example of :data:`compare.synthetic.HIDDEN_EXAMPLES` (its effect, optionally at another torque),
 the rig is simulated with several noise seeds, and four models are compared with each record (headline
