@@ -86,13 +86,9 @@ class CNNClassifier:
                                                       batch_size=max(1, batch_size // k)):
                 out = self.network(x, side)
                 b = sl.stop - sl.start
-                ps = torch.softmax(out["severity_class"], dim=1).numpy().reshape(b, k, -1)
-                pt = torch.softmax(out["teeth"], dim=1).numpy().reshape(b, k, -1)
-                s = out["severity"].numpy().reshape(b, k)
-                for c in range(k):  # summed crop by crop, in order
-                    p_sev[sl] += ps[:, c]
-                    p_teeth[sl] += pt[:, c]
-                    sev[sl] += s[:, c]
+                p_sev[sl] = torch.softmax(out["severity_class"], dim=1).numpy().reshape(b, k, -1).sum(axis=1)
+                p_teeth[sl] = torch.softmax(out["teeth"], dim=1).numpy().reshape(b, k, -1).sum(axis=1)
+                sev[sl] = out["severity"].numpy().reshape(b, k).sum(axis=1)
         severity = np.clip(sev / k * self.spec.severity_scale, 0.0, None)
         return Predictions(list(self.spec.severity_classes), list(self.spec.teeth_classes), p_sev / k,
                            p_teeth / k, severity, warnings)
