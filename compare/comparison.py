@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from compare.error import Residuals, fit_gain_db, residuals
+from compare.error import Residuals, fit_gain_db, reliability, residuals
 from compare.measurement import Measurement
 from compare.speed import SpeedEstimate, constant_track, refine_speed
 from compare.plan import VIEWS, Plan, make_plan
@@ -132,18 +132,21 @@ def evaluate(ref: Reference, y: np.ndarray, fs_hz: float, *, seed: int = 0, keep
         rng = np.random.default_rng(seed)
         y = y + np.sqrt(s2) * rng.standard_normal(y.size)
     v = analyse(y, fs_hz, track, plan, keep_curves=keep_curves)
-    res = residuals(ref.views, v, plan)
+    q = reliability(ref.views, ref.plan)
+    res = residuals(ref.views, v, plan, q=q)
     if noise_view_db is None and noise_draws > 0:
-        noise_view_db = noise_error(y0, fs_hz, track, plan, s2, v, seed=seed, draws=noise_draws)
+        noise_view_db = noise_error(y0, fs_hz, track, plan, s2, v, seed=seed, draws=noise_draws, q=q)
     res = res.with_noise(noise_view_db)
     return Evaluation(views=v, residuals=res, noise_added_rms=float(np.sqrt(s2)), x=y if keep_signal else None)
 
 
 def noise_error(y0: np.ndarray, fs_hz: float, track, plan: Plan, s2: float, first: SignalViews, *, seed: int,
-                draws: int) -> dict:
+                draws: int, q: np.ndarray | None = None) -> dict:
     """``N_v`` per view (module docstring, step 5): ``first`` is ``y0`` plus the comparison's own draw
     (variance ``s2``); ``draws`` more (seeds ``seed + 1 ...``) are analysed, and every pair of the draws is
-    compared as measurement and model (gain fitted). All zero when no noise is drawn (``s2`` = 0)."""
+    compared as measurement and model (gain fitted), with the measurement's reliability ``q``
+    (:func:`compare.error.reliability`), so that ``N`` weighs the residuals as ``E`` does. All zero when no
+    noise is drawn (``s2`` = 0)."""
     if s2 <= 0:
         return {v: 0.0 for v in VIEWS if plan.view_index(v).size}
     views = [first]
@@ -153,7 +156,7 @@ def noise_error(y0: np.ndarray, fs_hz: float, track, plan: Plan, s2: float, firs
     pairs = [(a, b) for i, a in enumerate(views) for b in views[i + 1:]]
     sq: dict = {}
     for a, b in pairs:
-        for view, e in residuals(a, b, plan).view_error_db.items():
+        for view, e in residuals(a, b, plan, q=q).view_error_db.items():
             sq[view] = sq.get(view, 0.0) + e * e / len(pairs)
     return {view: float(np.sqrt(e2)) for view, e2 in sq.items()}
 

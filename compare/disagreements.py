@@ -72,7 +72,7 @@ def rank_disagreements(ref, evaluation, *, threshold_db: float = THRESHOLD_DB,
     plan = ref.plan
     r = evaluation.residuals.residual_db
     g = evaluation.residuals.gain_db
-    w = location_weights(plan)
+    w = evaluation.residuals.weights if evaluation.residuals.weights is not None else location_weights(plan)
     order = np.lexsort((-w, -np.abs(r)))
     out = []
     for i in order:

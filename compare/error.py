@@ -17,7 +17,54 @@ Definition (what ``error_db`` means everywhere in gearpit)
 4. **Residual** ``r_i = a'_i - b'_i`` (dB; positive = the measurement has more).
 5. **Weights.** Inside a view each group of locations (mesh harmonics, pinion
    sidebands, ...) carries the same total weight, shared equally by its
-   locations: ``w_i = 1 / (groups in the view * locations in the group)``.
+   locations: ``g_i = 1 / (groups in the view * locations in the group)``.
+   In the views whose locations are single spectral lines (``order``,
+   ``envelope``: :data:`LINE_VIEWS`) each residual is further weighted by its
+   *reliability*, the inverse of the variance it would have if the model
+   matched the measurement there: ``q_i = s0^2 / (sigma_i^2 + s0^2)``,
+   ``w_i = g_i q_i``. ``sigma_i`` (:func:`noise_scatter_db`) is the scatter of
+   ``r_i`` between two records of the same vibration with independent noise at
+   the *measured* floor. With ``P_n`` the noise power per bin, ``S`` the line's
+   power, ``s = S / P_n = 10^((a_i - fa_i)/10) - 1`` and ``m =
+   10^(FLOOR_MARGIN_DB/10)``: a bin holding line and noise has power ``P = S +
+   P_n`` with variance ``P_n (2 S + P_n)`` (complex Gaussian noise), step 3
+   maps it to ``10 log10(P + m P_n)`` with slope ``(10 / ln 10) / (P + m
+   P_n)``, and two records add their variances:
+   ``sigma_i = (10 / ln 10) sqrt(2 (2 s + 1)) / (s + 1 + m)`` dB (1.23 dB for a
+   bin of noise only, 0.27 dB for a line 30 dB above its floor; checked by
+   Monte Carlo in ``tests/test_compare_views.py``). ``s0`` =
+   :data:`MODEL_TOLERANCE_DB` keeps a few very clean lines from carrying a view
+   alone. Bands, TSA powers and statistics average many bins or samples; their
+   noise scatter is small (measured 0.2 dB for noise-only bands) and they keep
+   ``q_i = 1``. The weights depend on the measurement only (not on the model),
+   so ``E`` is one fixed weighted RMS of the residuals for a given measurement:
+   every model, candidate and noise draw is measured with the same weights.
+   Why: without them a line view's error is dominated by the many locations
+   that hold only noise in both records (sidebands no effect excites), whose
+   residuals scatter by ~1 dB whatever the model; an effect that changes a few
+   clean lines by 1-2 dB (a tip relief) then moves the error by less than two
+   noise draws do (measured, 10 noise seeds: the rig's own model kept up to
+   0.67 of the baseline's excess error for a 10 um tip relief, 0.27 with the
+   weights). ``s0`` = 0.5 dB rather than 0.3: with 0.3 the same floor fell to
+   0.24, but a view came to hang on one or two clean lines and the error
+   surface of a housing mode grew ragged enough that the attribution's search
+   settled at 2775 Hz / 18 % damping (2.38 dB) instead of near the truth,
+   3000 Hz / 5 % (1.14 dB); with 0.5 it lands at 2900 Hz / 5.1 %.
+
+   **Status: off by default** (:data:`MODEL_TOLERANCE_DB` None, ``q_i = 1``:
+   the error as before the weights). Switched on at 0.5 dB, the hidden-effect
+   loop of ``tests/test_compare_attribution.py`` (seed 3) still passes for 7
+   of the 9 effects that pass without the weights, tip_relief is claimed and
+   fitted within tolerance (12.1 vs 10 um) but keeps 0.58 of the error (the
+   mesh-damping nuisance, not the floor, now limits it), and the two
+   fluctuation effects are no longer claimed: their amplitude search (time
+   stepped, on a 0.5 s window: a 5-point grid and one quadratic step) lands on
+   a grid point (torque: 0.316 against the true 0.2, whose full-record error
+   is 0.70 dB against 3.8 dB), and with the noise-only locations no longer
+   diluting the order view that poor fit raises it by 1.1-1.5 dB, past the
+   claim rule's 1 dB. The weights go on once that search refines its
+   amplitude (and frequency) well enough; until then they are available for
+   study (``reliability(..., tolerance_db=0.5)``, or the module constant).
 6. **View error** ``E_v = sqrt(sum_i w_i r_i^2 / sum_i w_i)`` over the view's
    locations; **total** ``E = sqrt(sum_v W_v E_v^2 / sum_v W_v)`` with the view
    weights :data:`VIEW_WEIGHTS` (all 1). Both in dB.
@@ -58,9 +105,17 @@ import numpy as np
 
 from compare.plan import VIEWS, Plan
 from compare.views import SignalViews
+from gearpit.errors import require
 
 VIEW_WEIGHTS = {"order": 1.0, "band": 1.0, "envelope": 1.0, "tsa": 1.0, "stats": 1.0}
 FLOOR_MARGIN_DB = 6.0
+#: ``s0`` of step 5 (dB): the scatter below which a residual counts as free of noise; None switches the
+#: reliability weights off (``q_i = 1``), which is the default: see step 5, "Status"
+MODEL_TOLERANCE_DB: float | None = None
+#: the value measured and recommended for when the weights are switched on (step 5)
+RECOMMENDED_TOLERANCE_DB = 0.5
+#: views whose locations are single spectral lines: their residuals get the reliability of step 5
+LINE_VIEWS = ("order", "envelope")
 
 
 @dataclass(frozen=True, eq=False)
@@ -79,6 +134,8 @@ class Residuals:
         ``E`` (dB), the raw error (what fits minimise).
     noise_view_db : dict or None
         ``N_v`` per view (dB), the noise error (step 7), when measured.
+    weights : ndarray or None
+        ``w_i`` of step 5 (group weight times reliability), as used.
     """
 
     gain_db: float
@@ -86,11 +143,12 @@ class Residuals:
     view_error_db: dict
     total_db: float
     noise_view_db: dict | None = None
+    weights: np.ndarray | None = None
 
     def with_noise(self, noise_view_db: dict | None) -> "Residuals":
         """The same residuals with the noise error ``N_v`` of each view (step 7)."""
         return Residuals(self.gain_db, self.residual_db, self.view_error_db, self.total_db,
-                         None if noise_view_db is None else dict(noise_view_db))
+                         None if noise_view_db is None else dict(noise_view_db), self.weights)
 
     @property
     def excess_view_db(self) -> dict:
@@ -109,7 +167,7 @@ class Residuals:
 
 
 def location_weights(plan: Plan) -> np.ndarray:
-    """``w_i`` of step 5 (module docstring)."""
+    """The group weights ``g_i`` of step 5 (module docstring), before the reliability."""
     w = np.zeros(len(plan.locations))
     for view in VIEWS:
         idx = plan.view_index(view)
@@ -121,10 +179,34 @@ def location_weights(plan: Plan) -> np.ndarray:
     return w
 
 
-def effective_count(plan: Plan, views=None) -> float:
-    """Kish's effective number of residuals, ``(sum u)^2 / sum u^2`` with ``u_i = W_v w_i``; with ``views``,
-    over the residuals of those views only."""
-    u = location_weights(plan) * np.array([VIEW_WEIGHTS[loc.view] if views is None or loc.view in views else 0.0
+def noise_scatter_db(meas: SignalViews, plan: Plan) -> np.ndarray:
+    """``sigma_i`` of step 5 (dB): the scatter of the residual at each line location between two records of the
+    same vibration with independent noise at the floors of ``meas``; NaN outside :data:`LINE_VIEWS` and where a
+    level or floor is not finite."""
+    snr_db = meas.levels - meas.floors
+    line = np.array([loc.view in LINE_VIEWS for loc in plan.locations], dtype=bool) & np.isfinite(snr_db)
+    s = np.clip(10 ** (np.where(line, np.minimum(snr_db, 300.0), 0.0) / 10) - 1.0, 0.0, None)
+    m = 10 ** (FLOOR_MARGIN_DB / 10)
+    sigma = (10 / np.log(10)) * np.sqrt(2 * (2 * s + 1)) / (s + 1 + m)
+    return np.where(line, sigma, np.nan)
+
+
+def reliability(meas: SignalViews, plan: Plan, tolerance_db: float | None = None) -> np.ndarray:
+    """``q_i = s0^2 / (sigma_i^2 + s0^2)`` of step 5 at the line locations, 1 elsewhere (dimensionless), with
+    ``s0`` = ``tolerance_db`` or, when not given, :data:`MODEL_TOLERANCE_DB`; all 1 when that is None (off)."""
+    s0 = MODEL_TOLERANCE_DB if tolerance_db is None else tolerance_db
+    if s0 is None:
+        return np.ones(len(plan.locations))
+    require(s0 > 0, "reliability tolerance_db", s0, "> 0 dB (None: weights off)")
+    sigma = noise_scatter_db(meas, plan)
+    q = s0 ** 2 / (np.nan_to_num(sigma, nan=0.0) ** 2 + s0 ** 2)
+    return np.where(np.isfinite(sigma), q, 1.0)
+
+
+def effective_count(plan: Plan, views=None, q: np.ndarray | None = None) -> float:
+    """Kish's effective number of residuals, ``(sum u)^2 / sum u^2`` with ``u_i = W_v w_i`` (``w_i`` with the
+    reliability ``q`` when given, step 5); with ``views``, over the residuals of those views only."""
+    u = location_weights(plan) * (1.0 if q is None else q) * np.array([VIEW_WEIGHTS[loc.view] if views is None or loc.view in views else 0.0
                                            for loc in plan.locations])
     return float(u.sum() ** 2 / np.sum(u * u))
 
@@ -158,8 +240,10 @@ def _psum(a: np.ndarray, f: np.ndarray) -> np.ndarray:
     return np.where(np.isfinite(f), 10 * np.log10(10 ** (a / 10) + 10 ** (np.where(np.isfinite(f), f, 0.0) / 10)), a)
 
 
-def residuals(meas: SignalViews, model: SignalViews, plan: Plan, gain_db: float | None = None) -> Residuals:
-    """Steps 2-6 of the module docstring; ``gain_db`` fitted when not given."""
+def residuals(meas: SignalViews, model: SignalViews, plan: Plan, gain_db: float | None = None,
+              q: np.ndarray | None = None) -> Residuals:
+    """Steps 2-6 of the module docstring; ``gain_db`` fitted when not given; ``q`` the reliability of step 5,
+    from ``meas`` when not given (pass the measurement's when ``meas`` is a noise draw of the model)."""
     if gain_db is None:
         gain_db = fit_gain_db(meas, model, plan)
     g = gain_mask(plan).astype(float) * gain_db
@@ -167,19 +251,19 @@ def residuals(meas: SignalViews, model: SignalViews, plan: Plan, gain_db: float 
     fb = model.floors + g
     floor = np.fmax(meas.floors, fb) + FLOOR_MARGIN_DB
     r = _psum(meas.levels, floor) - _psum(b, floor)
-    return summarise(r, plan, gain_db)
+    return summarise(r, plan, gain_db, reliability(meas, plan) if q is None else q)
 
 
-def summarise(r: np.ndarray, plan: Plan, gain_db: float = 0.0) -> Residuals:
-    """View errors and the total from residuals (steps 5-6)."""
-    w = location_weights(plan)
+def summarise(r: np.ndarray, plan: Plan, gain_db: float = 0.0, q: np.ndarray | None = None) -> Residuals:
+    """View errors and the total from residuals (steps 5-6); ``q``: the reliability (1 everywhere if None)."""
+    w = location_weights(plan) * (1.0 if q is None else q)
     views = {}
     for view in VIEWS:
         idx = plan.view_index(view)
         if idx.size == 0:
             continue
         views[view] = float(np.sqrt(np.sum(w[idx] * r[idx] ** 2) / np.sum(w[idx])))
-    return Residuals(gain_db=float(gain_db), residual_db=r, view_error_db=views, total_db=combine(views))
+    return Residuals(gain_db=float(gain_db), residual_db=r, view_error_db=views, total_db=combine(views), weights=w)
 
 
 def combine(view_db: dict) -> float:

@@ -38,7 +38,7 @@ def document(comparison, attribution=None, ledger_rows=(), *, measurement_path: 
     ref, ev = comparison.reference, comparison.evaluation
     m = ref.measurement
     plan = ref.plan
-    w = location_weights(plan)
+    w = ev.residuals.weights if ev.residuals.weights is not None else location_weights(plan)
     g = ev.residuals.gain_db
     locations = []
     for i, loc in enumerate(plan.locations):

@@ -72,7 +72,10 @@ SCHEMA = {
                       "properties": {"key": {"type": "string"},
                                      "view": {"enum": ["order", "band", "envelope", "tsa", "stats"]},
                                      "group": {"type": "string"}, "label": {"type": "string"}, "freq_hz": _NUM,
-                                     "weight": {"type": "number"}, "measured_db": _NUM, "model_db": _NUM,
+                                     "weight": {"type": "number",
+                                                "description": "w_i of compare.error step 5: the group weight "
+                                                               "times the reliability (line views)"},
+                                     "measured_db": _NUM, "model_db": _NUM,
                                      "floor_db": _NUM, "residual_db": _NUM}}},
         "disagreements": {
             "type": "array",

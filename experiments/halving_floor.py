@@ -1,6 +1,7 @@
 """How far the exact truth gets: the floor under the hidden-effect test's "error at most half".
 
-Run: ``python experiments/halving_floor.py [NAME ...] [--torque T] [--seeds 3 4 5 6 7] [--snr-db DB]``
+Run: ``python experiments/halving_floor.py [NAME ...] [--torque T] [--seeds 3 4 5 6 7] [--snr-db DB]
+[--reliability-db S0]``
 (on 2 cores about 10 s per effect and seed; an effect that needs time stepping, e.g. backlash, about 2.5 min).
 
 For a hidden example of :data:`compare.synthetic.HIDDEN_EXAMPLES` (its effect, optionally at another torque),
@@ -70,7 +71,15 @@ def main(argv=None) -> int:
     ap.add_argument("--torque", type=float, default=None, help="torque (N m) instead of the example's")
     ap.add_argument("--seeds", type=int, nargs="+", default=[3, 4, 5, 6, 7])
     ap.add_argument("--snr-db", type=float, default=None, help="rig sensor noise (default: the example's)")
+    ap.add_argument("--reliability-db", type=float, default=None,
+                    help="switch on the error's reliability weights with this s0 (dB; compare/error.py step 5)")
     args = ap.parse_args(argv)
+    if args.reliability_db is not None:
+        if not args.reliability_db > 0:
+            ap.error(f"--reliability-db: {args.reliability_db} is not > 0 dB")
+        import compare.error
+
+        compare.error.MODEL_TOLERANCE_DB = float(args.reliability_db)
     for n in args.names:
         if n not in HIDDEN_EXAMPLES:
             ap.error(f"names: {n!r} is not a hidden example (one of {', '.join(sorted(HIDDEN_EXAMPLES))})")

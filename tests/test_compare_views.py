@@ -121,3 +121,76 @@ def test_speed_refined_from_tacho_and_from_spectrum():
     assert a.speed_rpm == pytest.approx(true, rel=1e-4)
     assert b.speed_rpm == pytest.approx(true, rel=1e-4)
     assert (a.method, b.method) == ("tacho", "spectrum")
+
+
+def test_noise_scatter_of_line_residuals_matches_monte_carlo():
+    """compare.error step 5: the predicted scatter ``sigma_i`` of an order-view residual between two records of
+    the same vibration with independent noise, against Monte Carlo (6 noise draws of one clean record, the 15
+    pairs compared as measurement and model). Source: first-order variance of a line plus complex Gaussian
+    noise in one bin, mapped through the floor power sum of step 3. Tolerance: pooled RMS within a factor 2 in
+    each SNR band (measured ratios 0.68 for bins of noise only, where the floor estimate and the larger of two
+    bins bias the level, 0.75-1.3 above 15 dB)."""
+    import itertools
+
+    from compare.error import noise_scatter_db, residuals
+    from compare.views import analyse
+
+    x0, k = gear_record(noise=0.0)
+    checked = 0
+    for noise in (0.01, 0.1):
+        rng = np.random.default_rng(11)
+        draws = [x0 + noise * rng.standard_normal(x0.size) for _ in range(6)]
+        ref = prepare_reference(measured(draws[0], k))
+        plan = ref.plan
+        views = [ref.views] + [analyse(d, FS, ref.speed.track, plan) for d in draws[1:]]
+        r = np.array([residuals(a, b, plan).residual_db for a, b in itertools.combinations(views, 2)])
+        emp = np.sqrt(np.mean(r ** 2, axis=0))
+        pred = noise_scatter_db(ref.views, plan)
+        snr = ref.views.levels - ref.views.floors
+        order = plan.view_index("order")
+        assert np.all(np.isnan(pred[plan.view_index("stats")])) and np.all(np.isnan(pred[plan.view_index("band")]))
+        for lo, hi in ((-np.inf, 5.0), (15.0, 35.0), (35.0, np.inf)):
+            sel = order[(snr[order] >= lo) & (snr[order] < hi)]
+            if sel.size < 3:
+                continue
+            ratio = np.sqrt(np.mean(emp[sel] ** 2) / np.mean(pred[sel] ** 2))
+            assert 0.5 <= ratio <= 2.0, (noise, lo, hi, ratio)
+            checked += 1
+    assert checked >= 4
+
+
+def test_reliability_weights_are_off_by_default(base):
+    """compare.error step 5, "Status": by default every residual has reliability 1, so the weights used are the
+    group weights and the headline error is the one the hidden-effect table was measured with."""
+    from compare.error import MODEL_TOLERANCE_DB, location_weights
+
+    x, ref = base
+    assert MODEL_TOLERANCE_DB is None
+    np.testing.assert_array_equal(evaluate(ref, 0.5 * x, FS).residuals.weights, location_weights(ref.plan))
+
+
+def test_reliability_weights_depend_on_the_measurement_only(base, monkeypatch):
+    """Switched on (s0 = the recommended 0.5 dB), the weights of compare.error step 5 are the measurement's: two
+    different models are measured with the same weights (so E stays one fixed weighted RMS of the residuals), a
+    clean mesh harmonic outweighs a sideband location that holds only noise by more than 5x (1 against
+    0.14-0.18), and the group weights are unchanged outside the line views."""
+    import compare.error
+    from compare.error import location_weights
+
+    monkeypatch.setattr(compare.error, "MODEL_TOLERANCE_DB", compare.error.RECOMMENDED_TOLERANCE_DB)
+    x, ref = base
+    x2, _ = gear_record(sideband=0.05, seed=3)
+    w1 = evaluate(ref, 0.5 * x, FS).residuals.weights
+    w2 = evaluate(ref, x2, FS).residuals.weights
+    np.testing.assert_array_equal(w1, w2)
+    g = location_weights(ref.plan)
+    labels = [loc.label for loc in ref.plan.locations]
+    fm = labels.index("fm")
+    noise_only = [i for i, loc in enumerate(ref.plan.locations)
+                  if loc.view == "order" and loc.group == "wheel sidebands"
+                  and ref.views.levels[i] - ref.views.floors[i] < 3.0]
+    assert noise_only
+    assert (w1[fm] / g[fm]) > 5 * max(w1[i] / g[i] for i in noise_only)
+    for view in ("band", "tsa", "stats"):
+        idx = ref.plan.view_index(view)
+        np.testing.assert_array_equal(w1[idx], g[idx])
