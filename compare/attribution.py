@@ -84,7 +84,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from compare.comparison import NOISE_DRAWS, Reference, evaluate, prepare_reference, simulate_model
-from compare.error import combine, effective_count, excess, reliability
+from compare.error import combine, effective_count, excess
 from compare.fitspace import CHAIN_EFFECTS, fit_space
 from compare.search import (Search, Trial, line_sigma_u, quadratic, round_a, round_b, round_c, round_d,
                             surrogate_sigma_u)
@@ -300,7 +300,7 @@ def attribute(ref: Reference, model, baseline_residual: np.ndarray, *, candidate
             if n not in model.effect_names and n not in CHAIN_EFFECTS]
     transient = [n for n in pool if fit_space(get(n)).transient]
     periodic = [n for n in pool if n not in transient]
-    n_eff = effective_count(ref.plan, q=reliability(ref.views, ref.plan))
+    n_eff = effective_count(ref.plan, q=ref.reliability)
     results, n_sims, seconds = [], 0, {}
     future = None
     args = (ref, model, settings)

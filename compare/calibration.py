@@ -399,10 +399,10 @@ def _evaluate(ref, model, params, pts, extra_effects, seed, solver, counter, vie
 
 def _sigma(ref, params, values, scans, best, views) -> dict:
     """Conditional 1-sigma of each nuisance (the others held): curvature of E^2 along its last scan."""
-    from compare.error import effective_count, reliability
+    from compare.error import effective_count
     from compare.search import line_sigma_u
 
-    n_eff = effective_count(ref.plan, views, q=reliability(ref.views, ref.plan))     # Kish's effective count over the calibration's views
+    n_eff = effective_count(ref.plan, views, q=ref.reliability)     # Kish's count over the calibrated views
     out = {}
     for j, p in enumerate(params):
         line = [q for q in scans[j] if math.isfinite(q.error_db)] if scans else []

@@ -57,6 +57,11 @@ class Reference:
         return self.measurement.fs_hz
 
     @property
+    def reliability(self) -> np.ndarray:
+        """The measurement's reliability ``q_i`` of :mod:`compare.error` step 5 (all 1 while switched off)."""
+        return reliability(self.views, self.plan)
+
+    @property
     def noise_floor(self) -> float:
         """Per-bin power of the measured floor between the orders (measurement units squared)."""
         return float(self.views.curves["noise_floor"])
@@ -132,7 +137,7 @@ def evaluate(ref: Reference, y: np.ndarray, fs_hz: float, *, seed: int = 0, keep
         rng = np.random.default_rng(seed)
         y = y + np.sqrt(s2) * rng.standard_normal(y.size)
     v = analyse(y, fs_hz, track, plan, keep_curves=keep_curves)
-    q = reliability(ref.views, ref.plan)
+    q = ref.reliability
     res = residuals(ref.views, v, plan, q=q)
     if noise_view_db is None and noise_draws > 0:
         noise_view_db = noise_error(y0, fs_hz, track, plan, s2, v, seed=seed, draws=noise_draws, q=q)

@@ -14,7 +14,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from compare.error import location_weights
 from compare.plan import INDICATORS, STATS
 
 THRESHOLD_DB = 3.0
@@ -72,7 +71,7 @@ def rank_disagreements(ref, evaluation, *, threshold_db: float = THRESHOLD_DB,
     plan = ref.plan
     r = evaluation.residuals.residual_db
     g = evaluation.residuals.gain_db
-    w = evaluation.residuals.weights if evaluation.residuals.weights is not None else location_weights(plan)
+    w = evaluation.residuals.weights
     order = np.lexsort((-w, -np.abs(r)))
     out = []
     for i in order:

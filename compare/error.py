@@ -99,7 +99,7 @@ Kish, L. (1965). Survey Sampling. Wiley (effective number of weighted observatio
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -134,7 +134,7 @@ class Residuals:
         ``E`` (dB), the raw error (what fits minimise).
     noise_view_db : dict or None
         ``N_v`` per view (dB), the noise error (step 7), when measured.
-    weights : ndarray or None
+    weights : ndarray
         ``w_i`` of step 5 (group weight times reliability), as used.
     """
 
@@ -142,13 +142,12 @@ class Residuals:
     residual_db: np.ndarray
     view_error_db: dict
     total_db: float
+    weights: np.ndarray
     noise_view_db: dict | None = None
-    weights: np.ndarray | None = None
 
     def with_noise(self, noise_view_db: dict | None) -> "Residuals":
         """The same residuals with the noise error ``N_v`` of each view (step 7)."""
-        return Residuals(self.gain_db, self.residual_db, self.view_error_db, self.total_db,
-                         None if noise_view_db is None else dict(noise_view_db), self.weights)
+        return replace(self, noise_view_db=None if noise_view_db is None else dict(noise_view_db))
 
     @property
     def excess_view_db(self) -> dict:
@@ -206,8 +205,9 @@ def reliability(meas: SignalViews, plan: Plan, tolerance_db: float | None = None
 def effective_count(plan: Plan, views=None, q: np.ndarray | None = None) -> float:
     """Kish's effective number of residuals, ``(sum u)^2 / sum u^2`` with ``u_i = W_v w_i`` (``w_i`` with the
     reliability ``q`` when given, step 5); with ``views``, over the residuals of those views only."""
-    u = location_weights(plan) * (1.0 if q is None else q) * np.array([VIEW_WEIGHTS[loc.view] if views is None or loc.view in views else 0.0
-                                           for loc in plan.locations])
+    view_w = np.array([VIEW_WEIGHTS[loc.view] if views is None or loc.view in views else 0.0
+                       for loc in plan.locations])
+    u = location_weights(plan) * (1.0 if q is None else q) * view_w
     return float(u.sum() ** 2 / np.sum(u * u))
 
 
@@ -263,7 +263,8 @@ def summarise(r: np.ndarray, plan: Plan, gain_db: float = 0.0, q: np.ndarray | N
         if idx.size == 0:
             continue
         views[view] = float(np.sqrt(np.sum(w[idx] * r[idx] ** 2) / np.sum(w[idx])))
-    return Residuals(gain_db=float(gain_db), residual_db=r, view_error_db=views, total_db=combine(views), weights=w)
+    return Residuals(gain_db=float(gain_db), residual_db=r, view_error_db=views, total_db=combine(views),
+                     weights=w)
 
 
 def combine(view_db: dict) -> float:

@@ -18,7 +18,6 @@ from pathlib import Path
 
 import numpy as np
 
-from compare.error import location_weights
 from gearpit import __version__
 from gearpit.atomic import atomic_path
 
@@ -38,7 +37,7 @@ def document(comparison, attribution=None, ledger_rows=(), *, measurement_path: 
     ref, ev = comparison.reference, comparison.evaluation
     m = ref.measurement
     plan = ref.plan
-    w = ev.residuals.weights if ev.residuals.weights is not None else location_weights(plan)
+    w = ev.residuals.weights
     g = ev.residuals.gain_db
     locations = []
     for i, loc in enumerate(plan.locations):
