@@ -7,7 +7,8 @@ minimising the total error of :mod:`compare.error` within their bounds, in batch
 rounds (:mod:`compare.search`; time-stepped effects skip round C and get a richer round B):
 
 1. round A - a coarse grid of the first parameter (or the frequencies the
-   measurement points to, for a parameter in Hz), the second at its default
+   measurement points to, for a parameter in Hz; plus the values the effect's
+   physics singles out at the operating point), the second at its default
    (at three values when the first is a frequency);
 2. round B - a grid of the second parameter at the best first one, or a finer
    bracket around the best for a one-parameter effect; the string option's
@@ -85,9 +86,9 @@ import numpy as np
 
 from compare.comparison import NOISE_DRAWS, Reference, evaluate, prepare_reference, simulate_model
 from compare.error import combine, effective_count, excess
-from compare.fitspace import CHAIN_EFFECTS, fit_space
-from compare.search import (Search, Trial, line_sigma_u, quadratic, round_a, round_b, round_c, round_d,
-                            surrogate_sigma_u)
+from compare.fitspace import CHAIN_EFFECTS, fit_space, operating_seeds
+from compare.search import (Search, Trial, around_basins, line_sigma_u, quadratic, round_a, round_b, round_c,
+                            round_d, surrogate_sigma_u)
 from gearpit.errors import GearpitError, require
 
 
@@ -251,7 +252,7 @@ def _search_group(names_: list, ref: Reference, model, settings, transient: bool
     from datagen.effects import get
 
     t0 = time.perf_counter()
-    searches = [Search(get(n), fit_space(get(n))) for n in names_]
+    searches = [Search(get(n), fit_space(get(n)), operating_seeds(ref, get(n))) for n in names_]
     counter = [0]
     seed_ref = ref
     if transient:
@@ -261,10 +262,13 @@ def _search_group(names_: list, ref: Reference, model, settings, transient: bool
     first = [(s, t) for s in searches for t in round_a(s, seed_residual, seed_ref)]
     # the current model is simulated in the first batch, exactly like the candidates (seed, solver, window)
     base = _run(first, ref, model, settings, transient, counter, with_baseline=True)
+    for s in searches:
+        s.set_basins()
     # a time-stepped batch costs about the same for 1 or 40 cases: fewer, richer rounds
-    rounds = [lambda s: round_b(s, rich=True), round_d] if transient else [round_b, round_c, round_d]
+    rounds = ([lambda s, best=None: round_b(s, rich=True, best=best), round_d] if transient
+              else [round_b, round_c, round_d])
     for make in rounds:
-        _run([(s, t) for s in searches for t in make(s)], ref, model, settings, transient, counter)
+        _run([(s, t) for s in searches for t in around_basins(make, s)], ref, model, settings, transient, counter)
     results = [_result(s, base, ref, n_eff, disagreements) for s in searches]
     return results, counter[0], time.perf_counter() - t0
 

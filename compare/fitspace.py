@@ -12,6 +12,9 @@ search coordinates:
 - a parameter in Hz starts from the frequencies the measurement itself points
   to (:func:`frequency_seeds`): centres of bands, lines at no order, and
   modulation offsets (sideband spacings) where the model falls short;
+- values the effect's physics singles out at the measured operating point
+  (:meth:`datagen.effects.base.Effect.fit_seeds`, :func:`operating_seeds`: a
+  tip relief near the tooth deflection under the load) join the grid;
 - the declared string option is tried at every value once the numeric
   parameters have a first estimate.
 """
@@ -126,3 +129,18 @@ def frequency_seeds(ref, residual_db: np.ndarray, p: FitParameter, *, max_seeds:
         if len(seeds) == max_seeds:
             break
     return np.array(seeds) if seeds else grid(p)
+
+
+def operating_seeds(ref, effect_cls) -> dict:
+    """``effect_cls.fit_seeds`` at the operating point of the measurement behind ``ref`` (a
+    :class:`compare.comparison.Reference`), with the healthy mesh stiffness of its pair."""
+    from datagen.effects.base import Effect, EffectContext
+
+    if getattr(effect_cls.fit_seeds, "__func__", None) is Effect.fit_seeds.__func__:
+        return {}
+    from datagen.stiffness import mesh_stiffness
+
+    m = ref.measurement
+    ctx = EffectContext(pair=m.pair, speed_rpm=float(ref.speed.speed_rpm), torque_nm=float(m.torque_nm),
+                        fs_hz=float(m.fs_hz), duration_s=len(ref.x) / float(ref.fs_hz))
+    return effect_cls.fit_seeds(ctx, mesh_stiffness(m.pair))

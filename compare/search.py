@@ -7,15 +7,25 @@ caller (:mod:`compare.attribution`) simulates the points of every effect in one
 batch, so a round costs one :func:`datagen.simulate.simulate` call. Rounds:
 
 - :func:`round_a`: a grid of the first parameter (or the frequencies the
-  measurement points to, for a parameter in Hz); the second at its default, or
-  at three values when the first is a frequency;
+  measurement points to, for a parameter in Hz), plus the values the effect's
+  physics singles out at this operating point (its ``fit_seeds``); the second
+  at its default, or at three values when the first is a frequency;
 - :func:`round_b`: the second parameter's grid at the best first one (``rich``:
   crossed with steps of the first), or a finer bracket of a lone parameter; the
   string option's other values;
-- :func:`round_c`: steps around the best in every parameter;
+- :func:`round_c`: steps around the best in every parameter (at most half the
+  gap to the nearest value tried in its basin);
 - :func:`round_d`: the minimum of :func:`quadratic`, a least-squares quadratic
   surrogate of ``E^2`` over the points nearest the best, minimised within the
   bounds by :func:`scipy.optimize.minimize` (L-BFGS-B).
+
+After round A the :data:`MAX_BASINS` lowest local minima of its sweep of the
+first parameter are kept (:meth:`Search.set_basins`) and rounds B-D work around
+the best point of each (:func:`around_basins`; a quadratic uses only the points
+of its own basin): error levels cannot tell a tone's amplitude from its
+mirror across a zero, so a landscape can hold two minima of nearly the same
+depth (a tip relief past the load deflection and one as far short of it), and
+refining only the first round's best would settle in the wrong one.
 
 References
 ----------
@@ -32,6 +42,10 @@ from scipy.optimize import minimize
 
 from compare.fitspace import FitSpace, frequency_seeds, grid
 
+#: how many local minima of the first round are refined (a level-only view can leave two mirror minima, e.g.
+#: a tip relief as far above the load deflection as another is below it)
+MAX_BASINS = 2
+
 @dataclass
 class Trial:
     values: dict
@@ -44,12 +58,17 @@ class Trial:
 
 
 class Search:
-    def __init__(self, cls, space: FitSpace):
+    def __init__(self, cls, space: FitSpace, seeds: dict | None = None):
         self.cls = cls
         self.space = space
+        #: values the operating point singles out (:meth:`datagen.effects.base.Effect.fit_seeds`), in bounds
+        self.seeds = {p.name: np.array([float(v) for v in (seeds or {}).get(p.name, ()) if p.lo <= v <= p.hi])
+                      for p in space.params}
         self.trials: list[Trial] = []
         self.choice = cls().params().get(space.choice[0]) if space.choice else None
         self.default_choice = self.choice
+        #: first-round minima refined separately (:meth:`set_basins`); empty: refine around the best only
+        self.basins: list[np.ndarray] = []
 
     def point(self, values: dict, choice=None) -> Trial:
         choice = self.choice if choice is None else choice
@@ -63,6 +82,40 @@ class Search:
     def best(self) -> Trial | None:
         done = [t for t in self.trials if math.isfinite(t.error_db)]
         return min(done, key=lambda t: t.error_db) if done else None
+
+    def set_basins(self, n: int = MAX_BASINS) -> None:
+        """After the first round: the ``n`` lowest local minima of its sweep of the first parameter (the best
+        over the other parameters at each value), each refined on its own by the later rounds."""
+        done = [t for t in self.trials if math.isfinite(t.error_db)]
+        if not done or not self.space.params:
+            self.basins = [self.best.u.copy()] if done else []
+            return
+        by_v: dict[float, Trial] = {}
+        for t in done:
+            k = round(float(t.u[0]), 9)
+            if k not in by_v or t.error_db < by_v[k].error_db:
+                by_v[k] = t
+        line = [by_v[k] for k in sorted(by_v)]
+        e = [t.error_db for t in line]
+        minima = [t for i, t in enumerate(line)
+                  if (i == 0 or e[i] < e[i - 1]) and (i == len(line) - 1 or e[i] <= e[i + 1])]
+        minima.sort(key=lambda t: t.error_db)
+        self.basins = [t.u.copy() for t in minima[:n]] or [self.best.u.copy()]
+
+    def basin_of(self, t: Trial) -> int:
+        """Index of the basin whose first-round minimum is nearest ``t`` (in the search coordinates)."""
+        return int(np.argmin([float(np.sum((t.u - b) ** 2)) for b in self.basins])) if self.basins else 0
+
+    def centres(self) -> list[Trial]:
+        """The best trial of each basin (only the overall best before :meth:`set_basins`)."""
+        if not self.basins:
+            return [self.best] if self.best is not None else []
+        out = []
+        for i in range(len(self.basins)):
+            own = [t for t in self.trials if math.isfinite(t.error_db) and self.basin_of(t) == i]
+            if own:
+                out.append(min(own, key=lambda t: t.error_db))
+        return out
 
     def build(self, t: Trial):
         kw = dict(t.values)
@@ -80,6 +133,7 @@ def round_a(s: Search, ref_residual, ref) -> list[Trial]:
         return [s.point({})]
     p0 = ps[0]
     first = frequency_seeds(ref, ref_residual, p0) if p0.unit == "Hz" else grid(p0)
+    first = np.unique(np.concatenate([first, s.seeds[p0.name]]))
     second = [None]
     if len(ps) > 1:
         second = list(grid(ps[1], 3)) if p0.unit == "Hz" else [ps[1].default]
@@ -105,16 +159,17 @@ def _primary_steps(p, best_u: float, rich: bool) -> list[float]:
     return [float(p.from_u(best_u + du)) for du in (-1 / 12, 0.0, 1 / 12)]
 
 
-def round_b(s: Search, rich: bool = False) -> list[Trial]:
+def round_b(s: Search, rich: bool = False, best: Trial | None = None) -> list[Trial]:
     """Second parameter's grid at the best first one (``rich``: crossed with steps of the first, for
-    time-stepped effects whose batch costs the same whatever its size)."""
-    ps, best = s.space.params, s.best
+    time-stepped effects whose batch costs the same whatever its size); ``best``: the centre to work
+    around (default: the best trial)."""
+    ps, best = s.space.params, best or s.best
     if best is None:
         return []
     out = []
     if len(ps) >= 2:
         for v0 in _primary_steps(ps[0], best.u[0], rich):
-            for v in grid(ps[1], 5):
+            for v in np.unique(np.concatenate([grid(ps[1], 5), s.seeds[ps[1].name]])):
                 out.append(s.point({**best.values, ps[0].name: v0, ps[1].name: float(v)}))
     elif len(ps) == 1:
         step = 1.0 / (2 * 6)
@@ -126,14 +181,23 @@ def round_b(s: Search, rich: bool = False) -> list[Trial]:
     return [t for t in out if not s.seen(t)]
 
 
-def round_c(s: Search) -> list[Trial]:
-    ps, best = s.space.params, s.best
+def round_c(s: Search, best: Trial | None = None) -> list[Trial]:
+    """Steps around ``best`` (default: the best trial) in every parameter."""
+    ps, best = s.space.params, best or s.best
     if best is None or not ps:
         return []
-    s.choice = best.choice
+    if best is s.best:
+        s.choice = best.choice
     out = []
     for j, p in enumerate(ps):
         step = (0.02 if p.unit == "Hz" else 1.0 / 18) if j == 0 else 1.0 / 15
+        # no wider than half the gap to the nearest value already tried in this basin (a dense seed ladder has
+        # found a minimum narrower than the default step)
+        home = s.basin_of(best)
+        gaps = [abs(float(t.u[j] - best.u[j])) for t in s.trials if s.basin_of(t) == home]
+        gaps = [g for g in gaps if g > 1e-6]
+        if gaps:
+            step = min(step, 0.5 * min(gaps))
         for du in (-step, step):
             u = best.u.copy()
             u[j] = np.clip(u[j] + du, 0, 1)
@@ -161,10 +225,12 @@ def fit_quadratic(U: np.ndarray, y: np.ndarray, bounds: list) -> tuple[np.ndarra
     return res.x, H, max(float(res.fun), 1e-12)
 
 
-def quadratic(s: Search):
-    """Fit E^2 = c + g.u + 1/2 u'Hu on the points near the best; returns (u_min, H, E2_min) or None."""
-    best = s.best
-    pts = [t for t in s.trials if math.isfinite(t.error_db) and t.choice == best.choice]
+def quadratic(s: Search, best: Trial | None = None):
+    """Fit E^2 = c + g.u + 1/2 u'Hu on the points near ``best`` (default: the best trial), within its basin;
+    returns (u_min, H, E2_min) or None."""
+    best = best or s.best
+    home = s.basin_of(best)
+    pts = [t for t in s.trials if math.isfinite(t.error_db) and t.choice == best.choice and s.basin_of(t) == home]
     n = len(s.space.params)
     need = 1 + n + n * (n + 1) // 2
     if n == 0 or len(pts) < need:
@@ -177,13 +243,25 @@ def quadratic(s: Search):
     return best.u + du, H, e2
 
 
-def round_d(s: Search) -> list[Trial]:
-    q = quadratic(s)
+def round_d(s: Search, best: Trial | None = None) -> list[Trial]:
+    """The minimum of the quadratic surrogate around ``best`` (default: the best trial)."""
+    best = best or s.best
+    q = quadratic(s, best)
     if q is None:
         return []
     u = q[0]
-    t = s.point({p.name: float(p.from_u(u[j])) for j, p in enumerate(s.space.params)}, s.best.choice)
+    t = s.point({p.name: float(p.from_u(u[j])) for j, p in enumerate(s.space.params)}, best.choice)
     return [] if s.seen(t) else [t]
+
+
+def around_basins(make, s: Search) -> list[Trial]:
+    """The points of round ``make`` around the best trial of every basin of ``s``, without duplicates."""
+    out: list[Trial] = []
+    for c in s.centres():
+        for t in make(s, best=c):
+            if not any(np.allclose(t.u, o.u, atol=1e-4) and t.choice == o.choice for o in out):
+                out.append(t)
+    return out
 
 
 def line_sigma_u(offsets_u, error_db, best_error_db: float, n_eff: float) -> float:

@@ -104,6 +104,11 @@ How to write an effect
    log when the bounds are positive and span more than a factor
    :data:`datagen.effects.fit.LOG_SPAN`, or run from 0 to at most 1 (SI magnitudes, fractions:
    0 means "off"), else linear (a grade, a count).
+   Where the physics of the operating point singles out a scale of a fitted
+   parameter (a tip relief is sized against the tooth deflection under the
+   load), :meth:`Effect.fit_seeds` returns values the search starts from in
+   addition to its grid: a coarse grid over decades can step over a narrow
+   minimum near that scale.
 7. A user's own effect in their own file: ``load_plugin("my_effects.py")``
    (or ``gearpit simulate case.toml --plugin my_effects.py``) imports the file,
    whose ``@register`` decorators add the effects to the registry; they are
@@ -255,6 +260,14 @@ class Effect:
         field's, or more than one string option.
         """
         return resolve_fit(cls)
+
+    @classmethod
+    def fit_seeds(cls, ctx: "EffectContext", stiffness) -> dict:
+        """Values of fitted parameters that the operating point singles out (module docstring, item 6):
+        ``{field: sequence of values}``, tried by the comparison's first search round beside its grid (values
+        outside the search bounds are dropped). ``ctx`` is the measurement's :class:`EffectContext`,
+        ``stiffness`` the healthy :class:`datagen.stiffness.MeshStiffness` of its pair. Default: none."""
+        return {}
 
     def params(self) -> dict:
         """The parameters as a plain dict (SI, as in the field names)."""

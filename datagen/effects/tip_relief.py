@@ -100,6 +100,17 @@ class TipRelief(Effect):
     shape: str = field(default="linear", metadata={"unit": "-", "choices": RELIEF_SHAPES})
     gears: str = field(default="both", metadata={"unit": "-", "choices": GEAR_CHOICES})
 
+    @classmethod
+    def fit_seeds(cls, ctx, stiffness) -> dict:
+        """Reliefs from half to two and a half times the single-pair deflection at the measured load
+        (:func:`design_relief_m`), in steps of a tenth of it. Near that deflection the relief cancels the
+        loaded transmission error's step, so the mesh-harmonic levels pass through a notch: a relief a
+        little above it and one a little below give similar levels (the views are levels), and the minimum of
+        the error at the true relief is only about +/- 15 % wide, narrower than a grid over decades."""
+        if ctx.torque_nm <= 0:
+            return {}
+        return {"amount_m": design_relief_m(stiffness, ctx.torque_nm) * np.round(np.arange(0.5, 2.55, 0.1), 2)}
+
     def tooth_deviation_m(self, g_m, pinion_tooth, wheel_tooth, ctx):
         pair = ctx.pair
         g = np.asarray(g_m, dtype=float)
