@@ -59,13 +59,22 @@ measurement's noise, and one value for all keeps the ranking that of ``E``
 
 The best-ranked effect is *claimed* when it lowers the total (excess) error by at
 least ``claim_reduction`` (fraction) without raising any view's error by more
-than ``max_view_rise_db`` (an effect that is really there fits its own lines
-without spoiling the others; one that trades views - a broad housing mode that
-lifts the band levels towards a mains hum while it spoils the mesh harmonics by
-2.6 dB - stands in for something the registry lacks, and what it would explain
-stays unexplained); one at a time, because once it is in the model the next
+than ``max_view_rise_db``, or by more than ``rise_per_gain`` times what it takes
+off the total when that is larger (an effect that is really there fits its own
+lines without spoiling the others; one that trades views - a broad housing mode
+that lifts the band levels towards a mains hum while it spoils the mesh
+harmonics by 2.6 dB for a 1 dB gain - stands in for something the registry
+lacks, and what it would explain stays unexplained; but an effect that takes
+5.3 dB off the total may leave a view 1.2 dB above a baseline that was at its
+noise floor there - a pitch error on a helical rig whose nuisances were
+calibrated, measured by ``experiments/generalisation_check.py`` - without that
+being a trade); one at a time, because once it is in the model the next
 comparison ranks the rest against the improved model. When the best-ranked
-effect trades views, the next one that passes both tests is claimed.
+effect trades views, the next one that passes both tests is claimed. A
+time-stepped candidate, fitted on a window, is claimed only when both tests
+also hold on the whole record (:func:`_confirm_on_record`: it and the baseline
+are simulated over the whole record, and its reported errors become those);
+otherwise its status says it was not confirmed and the next one is tried.
 Other effects that also pass the threshold are listed as alternatives
 (several effects can leave similar lines). A disagreement of the baseline larger than
 ``unexplained_db`` that no claimed effect halves is reported as unexplained:
@@ -98,6 +107,8 @@ class AttributionSettings:
 
     claim_reduction: float = 0.30
     max_view_rise_db: float = 1.0
+    #: a view may rise by this fraction of the total's fall (dB) when that exceeds max_view_rise_db
+    rise_per_gain: float = 0.25
     unexplained_db: float = 6.0
     transient_window_s: float = 0.5
     transient_startup_s: float = 0.15
@@ -333,7 +344,19 @@ def attribute(ref: Reference, model, baseline_residual: np.ndarray, *, candidate
         results += r
         n_sims += n
     results.sort(key=lambda c: -c.reduction)
-    choose_claim(results, settings)
+    confirmed = []
+
+    def confirm(c):
+        ok, n = _confirm_on_record(c, ref, model, settings, list(disagreements))
+        confirmed.append(n)
+        return ok
+
+    t1 = time.perf_counter()
+    choose_claim(results, settings, confirm=confirm)
+    if confirmed:
+        seconds["whole_record_check"] = time.perf_counter() - t1
+        n_sims += sum(confirmed)
+        results.sort(key=lambda c: -c.reduction)     # the checked ones now carry their whole-record errors
     explained = {k for c in results if c.claimed for k in c.explains}
     unexplained = [d.to_dict() for d in disagreements
                    if abs(d.residual_db) >= settings.unexplained_db and d.key not in explained]
@@ -341,17 +364,64 @@ def attribute(ref: Reference, model, baseline_residual: np.ndarray, *, candidate
                        n_simulations=n_sims, group_seconds=seconds)
 
 
-def choose_claim(results: list, settings: AttributionSettings) -> CandidateResult | None:
+def _passes(c: CandidateResult, settings: AttributionSettings) -> bool:
+    allowed = max(settings.max_view_rise_db, settings.rise_per_gain * (c.baseline_error_db - c.error_db))
+    return c.reduction >= settings.claim_reduction and c.worst_view_rise_db <= allowed
+
+
+def choose_claim(results: list, settings: AttributionSettings, confirm=None) -> CandidateResult | None:
     """Mark the claimed candidate of ``results`` (sorted, largest reduction first; module docstring): the best
-    that lowers the error by ``claim_reduction`` and raises no view by more than ``max_view_rise_db``. One
+    that lowers the error by ``claim_reduction`` and raises no view by more than ``max_view_rise_db`` (or
+    ``rise_per_gain`` times its fall of the total error, if larger). ``confirm(candidate) -> bool``, when given,
+    must also hold (:func:`_confirm_on_record`: a fit made on a window, checked on the whole record). One
     effect at a time: add it, compare again, and the next one shows."""
     for c in results:
         if c.reduction < settings.claim_reduction:
             return None
-        if c.status == "fitted" and c.worst_view_rise_db <= settings.max_view_rise_db:
+        if c.status == "fitted" and _passes(c, settings) and (confirm is None or confirm(c)):
             c.claimed = True
             return c
     return None
+
+
+def _confirm_on_record(c: CandidateResult, ref: Reference, model, settings: AttributionSettings,
+                       disagreements) -> tuple[bool, int]:
+    """Check a candidate fitted on a window (time-stepped effects) on the whole record before it is claimed.
+
+    The window's reduction is measured against a baseline on the same window; it need not hold over the whole
+    record (measured, ``experiments/generalisation_check.py --calibrate``: a speed fluctuation fitted on 0.5 s of
+    a calibrated helical rig with a hidden Hertz stiffness claimed 39 % there and *raised* the whole record's
+    error by 43 %). The baseline and the candidate are simulated on the whole record, time-stepped alike, and
+    compared (the baseline with its noise draws, the candidate against the baseline's noise error); the
+    candidate's errors become the whole record's, and it passes when the claim rule holds on them. Returns
+    (passes, simulations run); a candidate fitted on the whole record passes unchecked.
+    """
+    from datagen.effects import EffectSpec
+
+    if c.window == _window(ref):
+        return True, 0
+    solver = {"omega_dt": settings.transient_omega_dt, "transient_s": settings.transient_startup_s,
+              "method": "transient"}
+    effect = EffectSpec.from_dict({"name": c.effect, **c.params}).build()
+    try:
+        y0, y1 = simulate_model(ref, model, extra_effects_list=[(), (effect,)], seed=settings.seed,
+                                duration_s=ref.model_duration_s(), solver=solver)
+    except (GearpitError, FloatingPointError, MemoryError, np.linalg.LinAlgError):
+        c.status = "not confirmed on the whole record (simulation failed)"
+        return False, 2
+    base = evaluate(ref, y0, ref.fs_hz, seed=settings.seed, noise_draws=NOISE_DRAWS).residuals
+    ev = evaluate(ref, y1, ref.fs_hz, seed=settings.seed).residuals
+    c.noise_view_db = dict(base.noise_view_db or {})
+    c.baseline_view_error_db = base.excess_view_db
+    c.baseline_error_db = base.excess_total_db
+    c.raw_baseline_error_db = base.total_db
+    c.set_raw(dict(ev.view_error_db), ev.total_db)
+    c.window = _window(ref)
+    c.explains = _explained(ref, ev.residual_db, disagreements)
+    if not _passes(c, settings):
+        c.status = "not confirmed on the whole record"
+        return False, 2
+    return True, 2
 
 
 def _refine_nuisances(results: list, ref: Reference, model, calibration, settings: AttributionSettings,

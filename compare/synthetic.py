@@ -116,8 +116,8 @@ def hidden_effect_measurement(name: str, *, seed: int = 3, **kw):
     """The rig of :data:`HIDDEN_EXAMPLES` ``[name]`` (its known effects plus the hidden one); returns
     (measurement, example); ``example.model()`` is the comparison model to start from."""
     ex = HIDDEN_EXAMPLES[name]
-    kw.setdefault("snr_db", ex.snr_db)
-    m = rig_measurement(ex.known + (ex.effect,), speed_rpm=ex.speed_rpm, torque_nm=ex.torque_nm, seed=seed, **kw)
+    args = {"speed_rpm": ex.speed_rpm, "torque_nm": ex.torque_nm, "snr_db": ex.snr_db, **kw}
+    m = rig_measurement(ex.known + (ex.effect,), seed=seed, **args)
     return m, ex
 
 
@@ -134,12 +134,15 @@ def check_fit(example: HiddenExample, params: dict) -> tuple[bool, str]:
     return ratio <= tol, f"{name}: fitted {fit:.4g}, true {true:.4g}, ratio {ratio:.3g} <= {tol}"
 
 
-def run_hidden_case(name: str, *, calibrate: bool | None = None, candidates=None, seed: int = 3):
+def run_hidden_case(name: str, *, calibrate: bool | None = None, candidates=None, seed: int = 3,
+                    rig: dict | None = None):
     """The user's loop on the rig of :data:`HIDDEN_EXAMPLES` ``[name]``: compare the example's model (nuisances
     calibrated when ``calibrate``; None: as the model says, off by default), attribute over ``candidates``
     (default: every registered effect), add the best candidate with its fitted parameters (and, in calibrated
     runs, the nuisances it was fitted with, as ``gearpit compare --add`` does) and compare again. ``seed``: the
     rig's noise draw (the tests use the default; other seeds check that a result is not one draw's luck).
+    ``rig``: keyword arguments of :func:`rig_measurement` that replace the example's (another pair, speed,
+    nuisance set, gain or noise: ``experiments/generalisation_check.py``).
 
     Returns ``(example, first comparison, attribution, second comparison)``.
     """
@@ -148,7 +151,7 @@ def run_hidden_case(name: str, *, calibrate: bool | None = None, candidates=None
     from compare.comparison import prepare_reference
     from datagen.effects import EffectSpec
 
-    m, ex = hidden_effect_measurement(name, seed=seed)
+    m, ex = hidden_effect_measurement(name, seed=seed, **(rig or {}))
     ref = prepare_reference(m)
     model = ex.model()
     c0 = calibrated_compare(m, model, reference=ref, calibrate_nuisances=calibrate)

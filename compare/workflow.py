@@ -161,6 +161,9 @@ def hidden_effect_loop(out: str | Path, hidden: str = "pitch_error", *, seed: in
         (out / stale).unlink(missing_ok=True)
     m, ex = hidden_effect_measurement(hidden)
     csv = write_rig_files(m, out)
+    if ex.known:
+        # what rig and model both have (e.g. a measured pitch error): the user's model starts with it
+        ex.model().save(out / "rig.model.toml")
     first = run(csv, report=out / "report_1.html", json_path=out / "report_1.json", seed=seed, calibrate=calibrate)
     claimed = first.attribution.claimed[0].effect if first.attribution.claimed else None
     second = first

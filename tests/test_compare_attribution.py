@@ -250,6 +250,16 @@ def test_claim_needs_the_reduction_and_no_view_traded():
     assert choose_claim(ranked, settings).effect == "pitch_error" and not ranked[0].claimed
     # the same trade within the allowed rise is claimed
     assert choose_claim([trader], AttributionSettings(max_view_rise_db=3.0)).effect == "transmission_path"
+    # a large gain may leave a view a little above a baseline at its noise floor (the calibrated helical rig of
+    # experiments/generalisation_check.py: total 6.86 -> 1.52 dB, stats 0.00 -> 1.18 dB): allowed rise
+    # max(1, 0.25 x 5.34) = 1.34 dB; the same rise with only the trader's 1 dB gain is refused
+    big = {"order": 2.26, "envelope": 10.07, "tsa": 11.35, "stats": 0.0}
+    strong = CandidateResult("pitch_error", "", {}, {}, 1.52, 6.86, {"order": 0.67, "envelope": 2.53, "tsa": 1.83,
+                                                                     "stats": 1.18}, "2 s", 1, baseline_view_error_db=big)
+    assert choose_claim([strong], settings).effect == "pitch_error"
+    small_gain = CandidateResult("pitch_error", "", {}, {}, 2.19, 3.19, {"order": 0.5, "band": 3.0, "envelope": 1.86},
+                                 "2 s", 1, baseline_view_error_db=base)
+    assert small_gain.worst_view_rise_db == pytest.approx(1.18) and choose_claim([small_gain], settings) is None
 
 
 def test_the_rigs_own_model_scores_at_the_noise_floor():

@@ -118,3 +118,40 @@ def test_tip_relief_fit_finds_the_relief_past_the_deflection():
     ok, text = check_fit(ex, a.candidates[0].params)
     assert ok, text
     assert a.candidates[0].claimed
+
+
+def test_a_window_fit_is_claimed_only_if_it_holds_on_the_whole_record():
+    """compare.attribution._confirm_on_record. Source: the simulator's truth. On a 1 s rig without hidden effect
+    a speed fluctuation of 5 % at 31 Hz, posing as a fit made on a 0.5 s window with a 90 % reduction, raises the
+    whole record's error (nothing of it is in the rig): not confirmed, its errors replaced by the whole record's,
+    not claimed. On a rig with a hidden 1 % / 23 Hz speed fluctuation the true effect is confirmed, with a whole-record
+    reduction of at least the claim threshold."""
+    from compare.attribution import AttributionSettings, CandidateResult, _confirm_on_record, choose_claim
+    from compare.comparison import compare, prepare_reference
+    from compare.model import ComparisonModel
+    from compare.synthetic import rig_measurement
+
+    settings = AttributionSettings()
+
+    def posing(effect, params):
+        return CandidateResult(effect, "", dict(params), {}, 0.1, 1.0, {"order": 0.1}, "0.5 s", 1,
+                               baseline_view_error_db={"order": 1.0})
+
+    for hidden, params, truth in (((), {"amplitude_fraction": 0.05, "frequency_hz": 31.0}, False),
+                                  (({"name": "speed_fluctuation", "amplitude_fraction": 0.01, "frequency_hz": 23.0},),
+                                   {"amplitude_fraction": 0.01, "frequency_hz": 23.0}, True)):
+        m = rig_measurement(hidden, duration_s=1.0)
+        ref = prepare_reference(m)
+        model = ComparisonModel()
+        c = posing("speed_fluctuation", params)
+        ok, n = _confirm_on_record(c, ref, model, settings, [])
+        assert n == 2 and c.window == "1 s"
+        assert ok is truth, (c.reduction, c.view_error_db, c.baseline_view_error_db)
+        if truth:
+            assert c.reduction >= settings.claim_reduction
+        else:
+            assert c.reduction < 0.3 and c.status.startswith("not confirmed")
+            c.status = "fitted"
+            assert choose_claim([c], settings, confirm=lambda x: _confirm_on_record(x, ref, model, settings, [])[0]) is None
+        # the whole record's baseline is the model's own: its excess error is that of a plain comparison
+        assert c.baseline_error_db == pytest.approx(compare(m, model, reference=ref).error_db["total"], abs=0.35)
