@@ -185,7 +185,14 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
         parts.append(table)
         parts.append(f"<p>{att['n_simulations']} simulations in {att['elapsed_s']:.1f} s. Sigma '-' means not "
                      "identifiable from these views. An effect is claimed when it lowers the error by 30 % or more "
-                     "and raises no view's error by more than 1 dB.</p>")
+                     "and raises no view's error by more than 1 dB (or a quarter of its fall of the total, when "
+                     "larger); a time-stepped effect is fitted on a window and measured on the whole record "
+                     "before it is ranked.</p>")
+        if att.get("rivals"):
+            parts.append("<p><b>Not distinguishable from the claimed " + html.escape(", ".join(att["claimed"]))
+                         + ":</b> " + html.escape(", ".join(att["rivals"])) + " lowers the error almost as much "
+                         "(within 5 % of the baseline); these views cannot tell them apart. Check with another "
+                         "sensor (an encoder on a shaft) before acting on the claim.</p>")
         if att["unexplained"]:
             parts.append("<p><b>Unexplained by every registered effect:</b></p><ul>"
                          + "".join(f"<li>{html.escape(u['text'])}</li>" for u in att["unexplained"]) + "</ul>")

@@ -114,6 +114,9 @@ SCHEMA = {
                                                         "noise_error_db": {"type": "number"}}}},
                 "unexplained": {"type": "array", "items": {"type": "object", "required": ["key", "text"]}},
                 "claimed": {"type": "array", "items": {"type": "string"}},
+                "rivals": {"type": "array", "items": {"type": "string"},
+                           "description": "effects that pass the claim rule within 5 % of the claimed one's "
+                                          "reduction: these views cannot tell them apart"},
                 "elapsed_s": {"type": "number"}, "n_simulations": {"type": "integer"},
                 "group_seconds": {"type": "object"}}},
         "ledger": {"type": "array",

@@ -205,6 +205,30 @@ def round_c(s: Search, best: Trial | None = None) -> list[Trial]:
     return [t for t in out if not s.seen(t)]
 
 
+def round_fine(s: Search, best: Trial | None = None) -> list[Trial]:
+    """Points along each parameter's axis through ``best`` at -1, -1/2, +1/2, +1 times half the gap to the
+    nearest value already tried in its basin: a ladder that halves the bracket around the minimum each round.
+    For time-stepped effects, whose batch costs about the same for 4 or 40 cases (measured: a torque
+    fluctuation's amplitude on the spur rig, a sharp minimum between the grid's 0.13 and 0.32 with the truth at
+    0.2; the quadratic surrogate of a sharp frequency minimum is unreliable there)."""
+    ps, best = s.space.params, best or s.best
+    if best is None or not ps:
+        return []
+    home = s.basin_of(best)
+    out = []
+    for j, p in enumerate(ps):
+        gaps = [abs(float(t.u[j] - best.u[j])) for t in s.trials if s.basin_of(t) == home]
+        gaps = [g for g in gaps if g > 1e-6]
+        if not gaps:
+            continue
+        step = 0.5 * min(gaps)
+        for du in (-step, -0.5 * step, 0.5 * step, step):
+            u = best.u.copy()
+            u[j] = np.clip(u[j] + du, 0, 1)
+            out.append(s.point({q.name: float(q.from_u(u[i])) for i, q in enumerate(ps)}, best.choice))
+    return [t for t in out if not s.seen(t)]
+
+
 def fit_quadratic(U: np.ndarray, y: np.ndarray, bounds: list) -> tuple[np.ndarray, np.ndarray, float]:
     """Least-squares ``y = c + g.u + 1/2 u'Hu`` through points ``U`` (m, n) and its minimum inside ``bounds``
     (one ``(lo, hi)`` per coordinate, L-BFGS-B); returns (u_min, H, y_min)."""

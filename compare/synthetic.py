@@ -163,3 +163,28 @@ def run_hidden_case(name: str, *, calibrate: bool | None = None, candidates=None
         model1 = model1.with_drivetrain(top.nuisance)
     c1 = calibrated_compare(m, model1, reference=ref, calibrate_nuisances=calibrate)
     return ex, c0, a, c1
+
+
+def case_checks(name: str, example: HiddenExample, first, attribution, second) -> dict:
+    """The issue's three checks on one hidden-effect run (:func:`run_hidden_case`'s outputs), as a dict:
+    ``ranks_first_and_claimed`` (strict), ``rival_of_claimed`` (the hidden effect is not first but is a rival of
+    the claimed effect: the views cannot tell them apart, :func:`compare.attribution.rivals_of`), ``halves``
+    (the error after adding the claimed/best effect is at most half the error before) and ``fit_ok`` (the hidden
+    effect's own fit, wherever it ranks, within the example's tolerance), with ``fit`` saying so."""
+    top = attribution.candidates[0]
+    own = next((c for c in attribution.candidates if c.effect == name), None)
+    ok_fit, fit_text = check_fit(example, own.params) if own is not None else (False, "not fitted")
+    e0, e1 = first.error_db["total"], second.error_db["total"]
+    return {"best": top.effect, "claimed": top.claimed, "reduction": top.reduction, "rivals": list(attribution.rivals),
+            "own_reduction": own.reduction if own is not None else None, "error_before_db": e0, "error_after_db": e1,
+            "ratio": e1 / e0 if e0 > 0 else float("nan"), "params": top.params, "own_params": own.params if own else None,
+            "fit": fit_text, "ranks_first_and_claimed": top.effect == name and top.claimed,
+            "rival_of_claimed": top.effect != name and top.claimed and name in attribution.rivals,
+            "halves": e1 <= 0.5 * e0, "fit_ok": ok_fit}
+
+
+def verdict(checks: dict) -> str:
+    """"yes" when all three checks pass, "tie" when they pass with the hidden effect a rival of the claimed one."""
+    if not (checks["halves"] and checks["fit_ok"]):
+        return "no"
+    return "yes" if checks["ranks_first_and_claimed"] else ("tie" if checks["rival_of_claimed"] else "no")

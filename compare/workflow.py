@@ -109,6 +109,9 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
         att = attribute(ref, comparison.model, comparison.evaluation.residuals.residual_db, candidates=candidates,
                         settings=settings or AttributionSettings(seed=seed), disagreements=comparison.disagreements,
                         parallel=parallel, calibration=cal)
+        if att.claimed and att.rivals:
+            messages.append(f"claimed {att.claimed[0].effect}, but {', '.join(att.rivals)} lowers the error almost as "
+                            "much: these views cannot tell them apart")
     row = make_row(comparison, att, run=len(rows) + 1, measurement_path=str(measurement_path))
     append_row(lpath, row)
     rows = rows + [row]

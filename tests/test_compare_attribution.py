@@ -81,6 +81,24 @@ def test_disturbance_outside_the_registry_is_unexplained(disturbance):
 #: mesh (hook 2c).
 NUISANCE_LIMITED: dict = {}
 
+#: pairs of effects whose signatures in these views coincide (name -> its twin). Source: the simulator's truth and
+#: compare.attribution.rivals_of. A speed fluctuation at the motor and a torque fluctuation at the load at the same
+#: frequency both excite the drive train's torsion, and the strongest mesh harmonic carries the same amplitude-to-
+#: phase modulation ratio for both (-24 dB at 23 Hz on spur-gds, measured by demodulation); once both fits were
+#: refined (compare.search.round_fine) and measured on the whole record, each hidden one was fitted by its twin
+#: 0.6-2.4 % *better* than by itself on this rig (a helical rig: 0.04 %). For these the test asserts what the
+#: tool promises instead of "ranks first": the hidden effect is claimed, or it is a rival of the claimed twin
+#: (within 5 % of its reduction, and the report says the views cannot tell them apart); its own fit is within
+#: the tolerance; adding the claimed effect halves the error.
+TWINS = {"speed_fluctuation": "torque_fluctuation", "torque_fluctuation": "speed_fluctuation"}
+
+
+def _is_top_or_rival(name, a) -> bool:
+    top = a.candidates[0]
+    if top.effect == name:
+        return True
+    return TWINS.get(name) == top.effect and top.claimed and name in a.rivals
+
 
 @functools.lru_cache(maxsize=None)
 def _hidden_run(name):
@@ -92,9 +110,10 @@ def _hidden_run(name):
 @pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(HIDDEN_EXAMPLES))
 def test_hidden_effect_ranks_first(name):
-    """Whole registry as candidates, nuisances on: the hidden effect has the largest error reduction."""
+    """Whole registry as candidates, nuisances on: the hidden effect has the largest error reduction (for the
+    TWINS: or it is a rival of its claimed twin)."""
     ex, c0, a, c1 = _hidden_run(name)
-    assert a.candidates[0].effect == name, [(x.effect, round(x.reduction, 3)) for x in a.candidates[:4]]
+    assert _is_top_or_rival(name, a), ([(x.effect, round(x.reduction, 3)) for x in a.candidates[:4]], a.rivals)
 
 
 @pytest.mark.slow
@@ -102,12 +121,15 @@ def test_hidden_effect_ranks_first(name):
                                   if n in NUISANCE_LIMITED else n for n in sorted(HIDDEN_EXAMPLES)])
 def test_hidden_effect_is_claimed_halves_the_error_and_is_fitted(name):
     """The hidden effect is claimed; the model with it (fitted parameters) has at most half the baseline's total
-    error; the checked parameter is within the tolerance of compare.synthetic.HIDDEN_EXAMPLES."""
+    error; the checked parameter is within the tolerance of compare.synthetic.HIDDEN_EXAMPLES (for the TWINS: the
+    hidden effect is claimed or a rival of its claimed twin, and its own fit is checked)."""
     ex, c0, a, c1 = _hidden_run(name)
     top = a.candidates[0]
-    assert top.effect == name and top.claimed
+    assert top.claimed and _is_top_or_rival(name, a), ([(x.effect, round(x.reduction, 3)) for x in a.candidates[:4]],
+                                                       a.rivals)
     assert c1.error_db["total"] <= 0.5 * c0.error_db["total"], (c1.error_db, c0.error_db)
-    ok, text = check_fit(ex, top.params)
+    own = next(c for c in a.candidates if c.effect == name)
+    ok, text = check_fit(ex, own.params)
     assert ok, text
 
 
@@ -260,6 +282,34 @@ def test_claim_needs_the_reduction_and_no_view_traded():
     small_gain = CandidateResult("pitch_error", "", {}, {}, 2.19, 3.19, {"order": 0.5, "band": 3.0, "envelope": 1.86},
                                  "2 s", 1, baseline_view_error_db=base)
     assert small_gain.worst_view_rise_db == pytest.approx(1.18) and choose_claim([small_gain], settings) is None
+
+
+
+def test_rivals_are_the_effects_the_views_cannot_tell_from_the_claim():
+    """rivals_of: effects that pass the claim rule within rival_reduction (5 %) of the claimed one's reduction
+    (the calibrated helical rig of experiments/generalisation_check.py: a hidden speed fluctuation, torque
+    fluctuation 75.8 % against speed fluctuation 75.x %). A close candidate that trades views, or one 6 % behind,
+    or one not confirmed on the whole record, is no rival; nothing claimed -> no rivals."""
+    from compare.attribution import AttributionSettings, CandidateResult, choose_claim, rivals_of
+
+    base = {"order": 10.0, "envelope": 8.0}
+
+    def cand(name, total, views, status="fitted"):
+        return CandidateResult(name, "", {}, {}, total, 10.0, dict(views), "2 s", 1, baseline_view_error_db=base,
+                               status=status)
+
+    settings = AttributionSettings()
+    torque = cand("torque_fluctuation", 2.42, {"order": 2.5, "envelope": 2.3})
+    speed = cand("speed_fluctuation", 2.50, {"order": 2.6, "envelope": 2.4})           # 0.8 % behind
+    far = cand("backlash", 3.10, {"order": 3.2, "envelope": 3.0})                      # 6.8 % behind
+    trader = cand("transmission_path", 2.45, {"order": 0.1, "envelope": 11.0})         # close, but trades views
+    stale = cand("hertz_nonlinear", 2.44, {"order": 2.4, "envelope": 2.4}, status="not confirmed on the whole record")
+    ranked = sorted([speed, far, trader, stale, torque], key=lambda c: -c.reduction)
+    claimed = choose_claim(ranked, settings)
+    assert claimed is torque
+    assert rivals_of(claimed, ranked, settings) == ["speed_fluctuation"]
+    assert rivals_of(claimed, ranked, AttributionSettings(rival_reduction=0.07)) == ["speed_fluctuation", "backlash"]
+    assert rivals_of(None, ranked, settings) == []
 
 
 def test_the_rigs_own_model_scores_at_the_noise_floor():
