@@ -210,3 +210,16 @@ def test_a_window_fit_is_claimed_only_if_it_holds_on_the_whole_record():
             assert _confirm_on_record([c], ref, model, settings, []) == 0
         # the whole record's baseline is the model's own: its excess error is that of a plain comparison
         assert c.baseline_error_db == pytest.approx(compare(m, model, reference=ref).error_db["total"], abs=0.35)
+
+
+def test_time_stepped_candidates_split_by_contact_law():
+    """compare.attribution.transient_groups: the effect with a nonlinear mesh law (backlash: contact loss, the slow
+    batch) is fitted apart from the fluctuations, which stay together (a batch costs about the same for one case or
+    many); a single kind gives a single group, and no name is lost or repeated."""
+    from compare.attribution import transient_groups
+
+    groups = transient_groups(["speed_fluctuation", "backlash", "torque_fluctuation"])
+    assert groups == [["backlash"], ["speed_fluctuation", "torque_fluctuation"]]
+    assert transient_groups(["torque_fluctuation", "speed_fluctuation"]) == [["torque_fluctuation", "speed_fluctuation"]]
+    assert transient_groups(["backlash"]) == [["backlash"]]
+    assert transient_groups([]) == []
