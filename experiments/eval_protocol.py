@@ -101,8 +101,9 @@ def log(msg: str) -> None:
 # ------------------------------------------------------------------ data
 
 
-def dataset(name: str, data_dir: Path) -> SignalSet:
-    """Damaged + healthy records of sweep ``name`` (generated once, then read)."""
+def dataset(name: str, data_dir: Path, channel: str | None = None) -> SignalSet:
+    """Damaged + healthy records of sweep ``name`` (generated once, then read); ``channel``: a stored
+    channel other than the first (experiments/sensor_protocol.py)."""
     from datagen.dataset import read_metadata
     from datagen.generate import generate
     from datagen.sweep import load_sweep
@@ -115,7 +116,7 @@ def dataset(name: str, data_dir: Path) -> SignalSet:
             log(f"generating {part}")
             generate(load_sweep(SWEEPS / f"{part}.toml"), out, progress=False)
         read_metadata(out)
-        parts.append(load_dataset(out))
+        parts.append(load_dataset(out, channel=channel))
     d = concat(parts)
     return SignalSet(d.signals, d.fs_hz, d.pair, d.labels, source=f"{name} (+{name}_healthy)", channel=d.channel)
 

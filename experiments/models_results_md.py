@@ -159,12 +159,13 @@ def results_tables(res: dict) -> str:
 BEGIN, END = "<!-- tables:begin (written by experiments/eval_protocol.py) -->", "<!-- tables:end -->"
 
 
-def insert_tables(path: Path, tables: str) -> None:
-    """Replace the text between the table markers of ``path`` (append the markers if missing)."""
+def insert_tables(path: Path, tables: str, markers: tuple[str, str] = (BEGIN, END)) -> None:
+    """Replace the text between the two ``markers`` of ``path`` (append the markers if missing)."""
+    begin, end = markers
     text = path.read_text() if path.is_file() else "# Classifier results\n\n"
-    if BEGIN in text and END in text:
-        head, rest = text.split(BEGIN, 1)
-        tail = rest.split(END, 1)[1]
+    if begin in text and end in text:
+        head, rest = text.split(begin, 1)
+        tail = rest.split(end, 1)[1]
     else:
         head, tail = text + "\n", "\n"
-    path.write_text(head + BEGIN + "\n\n" + tables + "\n" + END + tail)
+    path.write_text(head + begin + "\n\n" + tables + "\n" + end + tail)

@@ -118,6 +118,19 @@ def training_ranges(labels: pd.DataFrame) -> dict:
     return out
 
 
+#: physical quantity of a simulator channel, read from its unit suffix (datagen.output_channels)
+CHANNEL_QUANTITIES = (("_m_s2", "acceleration"), ("_rpm", "speed"), ("_n", "force"), ("_m", "displacement"))
+
+
+def channel_quantity(channel: str | None) -> str | None:
+    """``"acceleration"``, ``"displacement"``, ``"force"`` or ``"speed"`` for a channel named with its unit
+    (``acc_pinion_loa_m_s2``, ``dte_m``, ...); None for other names (a measurement's ``acc_x``)."""
+    for suffix, quantity in CHANNEL_QUANTITIES:
+        if channel and channel.endswith(suffix):
+            return quantity
+    return None
+
+
 def check_input(spec: ModelSpec, data: SignalSet, *, allow_mismatch: bool = False) -> list[str]:
     """Check ``data`` against ``spec``; return one warning string per record ("" if none).
 
@@ -126,9 +139,14 @@ def check_input(spec: ModelSpec, data: SignalSet, *, allow_mismatch: bool = Fals
     InputError
         Different tooth counts or sampling rate (unless ``allow_mismatch`` and the
         representation can be computed anyway), records too short for one
-        segment, a speed missing where the representation needs it.
+        segment, a speed missing where the representation needs it, a channel of another physical
+        quantity than the trained one (when both names carry a unit, :func:`channel_quantity`).
     """
     common: list[str] = []
+    trained_q, given_q = channel_quantity(spec.channel), channel_quantity(data.channel)
+    if trained_q and given_q and trained_q != given_q:  # e.g. a transmission-error model fed accelerations
+        raise InputError("channel", data.channel, f"a {trained_q} channel like the trained {spec.channel} "
+                         f"(this one is a {given_q})")
     p, q = spec.pair, data.pair
     if (p.z_pinion, p.z_wheel) != (q.z_pinion, q.z_wheel):
         msg = f"gear pair {q.name} ({q.z_pinion}/{q.z_wheel} teeth) differs from the trained {p.name} ({p.z_pinion}/{p.z_wheel})"

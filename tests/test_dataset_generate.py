@@ -198,3 +198,27 @@ def test_info_cli(reference, capsys):
     assert "spur-gds/severe/2+/cluster" in out and "size on disk" in out
     assert "speed_rpm" in out and " rpm" in out
     assert main(["dataset", "info", str(reference / "shards")]) == 2  # not a dataset: one-line error
+
+
+def test_second_channel_leaves_the_accelerometer_records_unchanged(reference, tmp_path):
+    """Storing the transmission error beside the accelerometer, with noise on every channel (as the default
+    classifier sweep does since the sensor protocol, experiments/sensor_protocol.py), gives the same
+    accelerometer bytes as the accelerometer alone: the protocols on the earlier dataset stay valid. The
+    transmission error carries its own noise at the record's SNR (against a generation at 120 dB: residual
+    RMS / signal RMS = 10^(-SNR/20) within 4 sigma of the sample-RMS scatter, per record and on average)."""
+    two = base(sweep__channels=["acc_pinion_loa_m_s2", "tacho_pinion", "dte_m"],
+               effects__noise={"snr_db": [20.0, 30.0], "channels": "all"})
+    out = tmp_path / "two"
+    generate(sweep_from_dict(two), out, progress=False)
+    rows = np.arange(sweep_from_dict(two).n_samples)
+    assert np.array_equal(dataset.load_signals(out, rows, "acc_pinion_loa_m_s2"),
+                          dataset.load_signals(reference, rows, "acc_pinion_loa_m_s2"))
+    quiet = base(sweep__channels=["dte_m"], effects__noise={"snr_db": [120.0, 120.0], "channels": "all"})
+    generate(sweep_from_dict(quiet), tmp_path / "quiet", progress=False)
+    te = dataset.load_signals(out, rows, "dte_m").astype(float)
+    clean = dataset.load_signals(tmp_path / "quiet", rows, "dte_m").astype(float)
+    snr = dataset.load_index(out).sort_values("sample_index")["snr_db"].to_numpy()
+    ratio = (te - clean).std(axis=1) / clean.std(axis=1) / 10.0 ** (-snr / 20.0)
+    # the noise is a unit-variance draw, so its sample RMS over n samples scatters by 1 / sqrt(2 n) (3.5 %)
+    sigma = 1.0 / np.sqrt(2 * te.shape[1])
+    assert np.all(np.abs(ratio - 1.0) < 4 * sigma) and abs(ratio.mean() - 1.0) < 4 * sigma / np.sqrt(ratio.size)

@@ -216,6 +216,29 @@ def test_wrong_fs_length_or_pair_is_a_clear_error(trained, separable):
     assert all("gear pair" in w for w in p.warnings)
 
 
+def test_a_channel_of_another_quantity_is_a_clear_error(trained, separable):
+    """A model trained on the transmission error (``dte_m``, a displacement) refuses accelerations
+    (``*_m_s2``) and forces (``*_n``); the same quantity, or a name without a unit, passes."""
+    from dataclasses import replace
+
+    from models.spec import channel_quantity, check_input
+
+    assert [channel_quantity(c) for c in ("acc_pinion_loa_m_s2", "dte_m", "mesh_force_n", "speed_pinion_rpm",
+                                          "acc_x", None)] == ["acceleration", "displacement", "force", "speed",
+                                                               None, None]
+    spec = replace(trained.spec, channel="dte_m")
+    test = separable[1].subset(np.arange(4))
+
+    def on(channel):
+        return SignalSet(test.signals, test.fs_hz, test.pair, test.labels, channel=channel)
+
+    for wrong in ("acc_pinion_loa_m_s2", "force_bearing_pinion_loa_n"):
+        with pytest.raises(InputError, match="channel"):
+            check_input(spec, on(wrong))
+    for fine in ("mesh_deflection_m", "acc_x", None):
+        assert len(check_input(spec, on(fine))) == 4
+
+
 def test_out_of_range_speed_is_a_warning(trained, separable):
     """A speed outside the trained range [900, 1500] rpm gives a per-record warning, not an error."""
     test = separable[1].subset(np.arange(4))

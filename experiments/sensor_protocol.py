@@ -1,0 +1,180 @@
+"""Which sensor reaches the classifier targets (issue 6)? Housing accelerometer vs transmission error.
+
+Run: ``python experiments/sensor_protocol.py --channel dte_m`` and ``--channel acc_pinion_loa_m_s2`` (one
+process per channel, in parallel on 2 cores: ~25 min; the datasets are shared with
+``experiments/eval_protocol.py``), then ``python experiments/sensor_protocol.py --tables`` writes the table
+between the ``sensor`` markers of experiments/RESULTS.md.
+
+Why
+---
+On the housing accelerometer the severity class stops near 83-90 % (RESULTS.md, identifiability study):
+the pit's excitation is a stiffness loss *under load*, and the accelerometer sees it through a housing path
+of unknown gain and colour, normalised by a mesh tone that also carries the load-independent profile
+error. The dynamic transmission error ``dte_m = rb1 phi1 - rb2 phi2`` (what two shaft encoders measure on a
+test rig, e.g. Remond 2000) has no housing path and a calibrated scale (metres): a pit's dip in it is the
+load times the lost compliance, so its absolute size is readable. This protocol measures what that is
+worth, on the *same* records: the default sweep (``experiments/models_sweeps/default*.toml``) stores both
+channels, each with its own sensor noise at the record's SNR (20-40 dB, ``[effects.noise] channels =
+"all"``), so the accelerometer records are byte-identical to those the other protocols use.
+
+What
+----
+For each channel: the in-domain split (stratified 70/30, the split of ``eval_protocol.in_domain``) and the
+two cross-condition splits (speed: train < 1200 rpm, test >= 1200 rpm; load: train < 50 N m, test >= 50
+N m), the CNN variants ``tsa_op`` (TSA + known speed and load) and ``tsa_level`` (also the record's RMS in
+the channel's unit: for the transmission error a calibrated scale, for the accelerometer one tied to the
+sensor path), and the three feature-table baselines (the best chosen on an internal split, as in
+``eval_protocol.baseline_runs``). Fixed seeds as in ``eval_protocol``.
+
+The training records are the default dataset's training part **plus a second draw of the same sweep**
+(seeds + :data:`EXTRA_SEED_OFFSET`, 1200 more records; across conditions only its records of the training
+condition); the test records are exactly those of ``eval_protocol`` (the default's test part). Why: the
+learning curve of RESULTS.md still rises at 838 training records (teeth 81 -> 86 -> 90 % from 25 to 100 %),
+and on the transmission error a pilot run showed what more records give (in-domain ``tsa_level``: 97.5 %
+severity / 93.6 % teeth with the default's 838 training records, 98.9 % / 98.6 % with the second draw).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "experiments"))
+
+from eval_protocol import OUT, SEED, baseline_runs, cnn_run, dataset, log, strata  # noqa: E402
+from models_results_md import HEAD, KINDS, _row, insert_tables  # noqa: E402
+
+from models.baselines import feature_config_for, feature_table  # noqa: E402
+from models.data import SignalSet, concat  # noqa: E402
+from models.sources import load_dataset  # noqa: E402
+from models.train import stratified_split  # noqa: E402
+
+CHANNELS = {"acc_pinion_loa_m_s2": "housing accelerometer (pinion, line of action)",
+            "dte_m": "transmission error (two shaft encoders)"}
+VARIANTS = ("tsa_op", "tsa_level")
+SPLITS = (("speed", "speed_rpm", 1200.0, "rpm"), ("load", "torque_nm", 50.0, "N m"))
+WHERE = OUT / "sensor"
+BEGIN, END = "<!-- sensor:begin (written by experiments/sensor_protocol.py) -->", "<!-- sensor:end -->"
+TARGETS = {"in_domain": 0.97, "speed": 0.85, "load": 0.85}
+SWEEPS = ROOT / "experiments" / "models_sweeps"
+#: seed offset of the second draw of the default sweep (more training records: the learning curve of
+#: RESULTS.md still rises at 838 training records, the teeth accuracy by ~4 points per doubling)
+EXTRA_SEED_OFFSET = 100
+
+
+def splits(data) -> dict[str, tuple[np.ndarray, np.ndarray, str]]:
+    """name -> (train rows, test rows, rule) of the three protocols."""
+    tr, te = stratified_split(strata(data), 0.3, SEED)
+    out = {"in_domain": (tr, te, "stratified 70/30")}
+    lab = data.labels
+    for name, col, edge, unit in SPLITS:
+        v = lab[col].to_numpy()
+        out[name] = (np.nonzero(v < edge)[0], np.nonzero(v >= edge)[0],
+                     f"train {col} < {edge:g} {unit}, test >= {edge:g} {unit}")
+    return out
+
+
+def second_draw(data_dir: Path, channel: str) -> SignalSet:
+    """A second draw of the default sweep (its seeds + :data:`EXTRA_SEED_OFFSET`): same classes and physics,
+    other records (generated once into ``data_dir``, then read)."""
+    from datagen.generate import generate
+    from datagen.sweep import sweep_from_dict
+    from gearpit.tomlio import read_toml
+
+    parts = []
+    for part in ("default", "default_healthy"):
+        doc = read_toml(SWEEPS / f"{part}.toml")
+        doc["sweep"]["seed"] += EXTRA_SEED_OFFSET
+        doc["sweep"]["name"] += f"-second-draw"
+        out = data_dir / f"{part}_second_draw"
+        if not (out / "index.parquet").is_file():
+            log(f"generating {out.name}")
+            generate(sweep_from_dict(doc), out, progress=False)
+        parts.append(load_dataset(out, channel=channel))
+    return concat(parts)
+
+
+def run_channel(channel: str, data_dir: Path, jobs: int) -> dict:
+    data = dataset("default", data_dir, channel=channel)
+    more = second_draw(data_dir, channel)
+    both = concat([data, more])
+    cfg = feature_config_for(both)
+    log(f"feature table of default + second draw / {channel} ({len(both)} records)")
+    x, names = feature_table(both, cfg, n_jobs=jobs)
+    x_data, x_more = x[:len(data)], x[len(data):]
+    res = {"channel": channel, "label": CHANNELS[channel], "protocols": {}}
+    more_splits = splits(more)
+    for name, (tr, te, rule) in splits(data).items():
+        log(f"{channel}: {name} ({rule})")
+        # training: the default's training part and the second draw's (all of it in-domain, its rows of
+        # the training condition across conditions); test: the default's test part, as in eval_protocol
+        tr_more = np.arange(len(more)) if name == "in_domain" else more_splits[name][0]
+        train, test = concat([data.subset(tr), more.subset(tr_more)]), data.subset(te)
+        x_train = np.concatenate([x_data[tr], x_more[tr_more]])
+        where = WHERE / channel / name
+        r = {"rule": rule, "n_train": len(train), "n_test": int(te.size), "cnn": {}}
+        for v in VARIANTS:
+            r["cnn"][v] = cnn_run(train, {"test": test}, v, where / f"cnn_{v}")
+        r["baselines"] = baseline_runs(train, x_train, {"test": (test, x_data[te])}, names, cfg, where)
+        res["protocols"][name] = r
+        (WHERE / f"{channel}.json").write_text(json.dumps(res, indent=1))  # partial results survive
+    return res
+
+
+def tables(results: list[dict]) -> str:
+    rows = ["### Sensor: housing accelerometer vs transmission error (default dataset, the same records)", "",
+            HEAD]
+    for res in results:
+        for name, r in res["protocols"].items():
+            label = f"{name.replace('_', '-')} ({r['rule']}), {res['label']}"
+            for v in VARIANTS:
+                rows.append(_row(f"{label}: CNN ({v})", r["cnn"][v]["test"]))
+            b = r["baselines"]
+            best = b.get("best") or max(KINDS, key=lambda k: b[k]["test"]["accuracy"])
+            rows.append(_row(f"{label}: best baseline ({best})", b[best]["test"]))
+    met = []
+    for res in results:
+        for name, r in res["protocols"].items():
+            ok = [v for v in VARIANTS if min(r["cnn"][v]["test"]["accuracy"], r["cnn"][v]["test"]["teeth_accuracy"])
+                  >= TARGETS[name]]
+            met.append(f"{res['channel']} / {name}: " + (", ".join(ok) if ok else "none"))
+    rows += ["", f"Targets (in-domain {TARGETS['in_domain']:.0%}, cross-condition {TARGETS['speed']:.0%}, both "
+             "tasks) met by: " + "; ".join(met) + "."]
+    return "\n".join(rows) + "\n"
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--channel", choices=tuple(CHANNELS), help="run the protocol on this channel")
+    ap.add_argument("--data-dir", type=Path, default=OUT / "data", help="where the generated datasets live")
+    ap.add_argument("--jobs", type=int, default=1, help="processes for the feature table")
+    ap.add_argument("--tables", action="store_true", help="write the RESULTS.md table from the stored runs")
+    args = ap.parse_args(argv)
+    if args.channel is None and not args.tables:
+        ap.error("give --channel or --tables")
+    import torch
+
+    torch.set_num_threads(1)
+    WHERE.mkdir(parents=True, exist_ok=True)
+    if args.channel:
+        t0 = time.perf_counter()
+        res = run_channel(args.channel, args.data_dir, args.jobs)
+        res["seconds"] = round(time.perf_counter() - t0, 1)
+        (WHERE / f"{args.channel}.json").write_text(json.dumps(res, indent=1))
+        log(f"wrote {WHERE / (args.channel + '.json')}")
+    if args.tables:
+        results = [json.loads((WHERE / f"{c}.json").read_text()) for c in CHANNELS if (WHERE / f"{c}.json").is_file()]
+        text = tables(results)
+        print(text)
+        insert_tables(ROOT / "experiments" / "RESULTS.md", text, markers=(BEGIN, END))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
