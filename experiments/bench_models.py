@@ -37,8 +37,8 @@ sys.path.insert(0, str(ROOT / "experiments"))
 from eval_protocol import VARIANTS, dataset  # noqa: E402
 
 
-def default_dataset(data_dir: Path):
-    return dataset("default", data_dir)
+def default_dataset(data_dir: Path, channel: str | None = None):
+    return dataset("default", data_dir, channel=channel)
 
 
 def main(argv=None) -> int:
@@ -47,13 +47,16 @@ def main(argv=None) -> int:
     ap.add_argument("--variant", default="tsa", choices=tuple(VARIANTS),
                     help="CNN variant of experiments/eval_protocol.py (representation + side inputs)")
     ap.add_argument("--threads", type=int, default=1, choices=(1, 2))
+    ap.add_argument("--channel", default=None,
+                    help="stored channel of the default dataset (default: the first, the housing accelerometer; "
+                         "dte_m: the transmission error, experiments/sensor_protocol.py)")
     args = ap.parse_args(argv)
     import torch
 
     torch.set_num_threads(args.threads)
-    data = default_dataset(args.data_dir)
+    data = default_dataset(args.data_dir, args.channel)
     rep, side = VARIANTS[args.variant]
-    print(f"default dataset: {len(data)} records x {data.n_samples} samples at {data.fs_hz:g} Hz")
+    print(f"default dataset: {len(data)} records x {data.n_samples} samples at {data.fs_hz:g} Hz, channel {data.channel}")
 
     # reference: the representation alone, once over the training records
     t0 = time.perf_counter()
@@ -86,7 +89,7 @@ def main(argv=None) -> int:
           f"target >= {THROUGHPUT_TARGET:.0f}")
     print(f"reference: representation alone {ref_rate:.0f} signals/s; predict (1 crop) runs at "
           f"{rates[1] / ref_rate:.2f} of it")
-    result = {"benchmark": "models", "variant": args.variant, "representation": rep.kind,
+    result = {"benchmark": "models", "variant": args.variant, "channel": data.channel, "representation": rep.kind,
               "side_inputs": list(side), "threads": args.threads, "n_records": len(data),
               "train_seconds": round(t_train, 1), "epochs": tr["epochs_run"], "n_parameters": tr["n_parameters"],
               "train_target_seconds": TRAIN_TARGET_S, "train_ok": t_train < TRAIN_TARGET_S,

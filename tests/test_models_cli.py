@@ -157,3 +157,22 @@ def test_unknown_rate_csv_records_and_labels(tmp_path):
     assert set(d.labels["load_percent"]) == {50.0}
     assert d.labels["mesh_cps"].to_numpy() == pytest.approx(0.074, abs=2e-5)
     assert d.as_binary().labels["severity_class"].tolist() == ["damaged"] * 2 + ["healthy"] * 2
+
+
+def test_transmission_error_train_config_is_the_protocol_variant():
+    """experiments/train_te.toml (README, "Which sensor") is the ``tsa_level`` CNN of the sensor protocol:
+    the same representation and side inputs as experiments/eval_protocol.VARIANTS, so the README's command
+    trains what RESULTS.md measured."""
+    import sys
+    from pathlib import Path
+
+    from gearpit.tomlio import read_toml
+    from models.train import TrainConfig
+
+    root = Path(__file__).resolve().parents[1]
+    sys.path.insert(0, str(root / "experiments"))
+    from eval_protocol import VARIANTS
+
+    cfg = TrainConfig.from_dict(read_toml(root / "experiments" / "train_te.toml")["train"])
+    rep, side = VARIANTS["tsa_level"]
+    assert cfg.representation == rep and cfg.operating_inputs == side
