@@ -47,13 +47,16 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "experiments"))
 
-from eval_protocol import OUT, SEED, baseline_runs, cnn_run, dataset, log, strata  # noqa: E402
+from eval_protocol import MAX_SECONDS, OUT, SEED, baseline_runs, cnn_run, dataset, log, strata, summary  # noqa: E402
+from eval_protocol import VARIANTS as VARIANTS_ALL  # noqa: E402
 from models_results_md import HEAD, KINDS, _row, insert_tables  # noqa: E402
 
+from models.augment import AugmentConfig  # noqa: E402
 from models.baselines import feature_config_for, feature_table  # noqa: E402
+from models.evaluate import evaluate  # noqa: E402
 from models.data import SignalSet, concat  # noqa: E402
 from models.sources import load_dataset  # noqa: E402
-from models.train import stratified_split  # noqa: E402
+from models.train import TrainConfig, stratified_split, train_cnn  # noqa: E402
 
 CHANNELS = {"acc_pinion_loa_m_s2": "housing accelerometer (pinion, line of action)",
             "dte_m": "transmission error (two shaft encoders)"}
@@ -80,9 +83,11 @@ def splits(data) -> dict[str, tuple[np.ndarray, np.ndarray, str]]:
     return out
 
 
-def second_draw(data_dir: Path, channel: str) -> SignalSet:
-    """A second draw of the default sweep (its seeds + :data:`EXTRA_SEED_OFFSET`): same classes and physics,
-    other records (generated once into ``data_dir``, then read)."""
+def second_draw(data_dir: Path, channel: str, *, seed_offset: int = EXTRA_SEED_OFFSET, tag: str = "second_draw",
+                drive_train: dict | None = None) -> SignalSet:
+    """Another draw of the default sweep (its seeds + ``seed_offset``): same classes and physics (but for
+    ``drive_train`` fields given as sweep draws, e.g. ``{"bearing_n_per_m": [3e7, 3e8]}``), other records;
+    generated once into ``data_dir / f"{part}_{tag}"``, then read."""
     from datagen.generate import generate
     from datagen.sweep import sweep_from_dict
     from gearpit.tomlio import read_toml
@@ -90,14 +95,24 @@ def second_draw(data_dir: Path, channel: str) -> SignalSet:
     parts = []
     for part in ("default", "default_healthy"):
         doc = read_toml(SWEEPS / f"{part}.toml")
-        doc["sweep"]["seed"] += EXTRA_SEED_OFFSET
-        doc["sweep"]["name"] += f"-second-draw"
-        out = data_dir / f"{part}_second_draw"
+        doc["sweep"]["seed"] += seed_offset
+        doc["sweep"]["name"] += "-" + tag.replace("_", "-")
+        doc.setdefault("drive_train", {}).update(drive_train or {})
+        out = data_dir / f"{part}_{tag}"
         if not (out / "index.parquet").is_file():
             log(f"generating {out.name}")
             generate(sweep_from_dict(doc), out, progress=False)
         parts.append(load_dataset(out, channel=channel))
     return concat(parts)
+
+
+def training_and_test(split: str, data: SignalSet, more: SignalSet) -> tuple[SignalSet, SignalSet, np.ndarray]:
+    """Training records (the default's training part + ``more``'s: all of it in-domain, its rows of the
+    training condition across conditions), test records (the default's test part, as in eval_protocol) and
+    the training rows of each part, for the feature table."""
+    tr, te, _ = splits(data)[split]
+    tr_more = np.arange(len(more)) if split == "in_domain" else splits(more)[split][0]
+    return concat([data.subset(tr), more.subset(tr_more)]), data.subset(te), (tr, te, tr_more)
 
 
 def run_channel(channel: str, data_dir: Path, jobs: int) -> dict:
@@ -109,13 +124,9 @@ def run_channel(channel: str, data_dir: Path, jobs: int) -> dict:
     x, names = feature_table(both, cfg, n_jobs=jobs)
     x_data, x_more = x[:len(data)], x[len(data):]
     res = {"channel": channel, "label": CHANNELS[channel], "protocols": {}}
-    more_splits = splits(more)
-    for name, (tr, te, rule) in splits(data).items():
+    for name, (_, _, rule) in splits(data).items():
         log(f"{channel}: {name} ({rule})")
-        # training: the default's training part and the second draw's (all of it in-domain, its rows of
-        # the training condition across conditions); test: the default's test part, as in eval_protocol
-        tr_more = np.arange(len(more)) if name == "in_domain" else more_splits[name][0]
-        train, test = concat([data.subset(tr), more.subset(tr_more)]), data.subset(te)
+        train, test, (tr, te, tr_more) = training_and_test(name, data, more)
         x_train = np.concatenate([x_data[tr], x_more[tr_more]])
         where = WHERE / channel / name
         r = {"rule": rule, "n_train": len(train), "n_test": int(te.size), "cnn": {}}
@@ -124,6 +135,35 @@ def run_channel(channel: str, data_dir: Path, jobs: int) -> dict:
         r["baselines"] = baseline_runs(train, x_train, {"test": (test, x_data[te])}, names, cfg, where)
         res["protocols"][name] = r
         (WHERE / f"{channel}.json").write_text(json.dumps(res, indent=1))  # partial results survive
+    return res
+
+
+#: one-run ablations on the transmission error (``--ablation NAME``): protocol split, TrainConfig fields, and
+#: the draw that joins the default's training part (None: the second draw)
+BEARINGS = {"bearing_n_per_m": [3e7, 3e8]}   # moves the 2.2 kHz bearing-mesh mode to 1.3-3.6 kHz
+ABLATIONS = {
+    "path": ("speed", {"augment": AugmentConfig(path_probability=0.5)}, None),
+    "lowpass": ("speed", {"augment": AugmentConfig(lowpass_probability=0.5)}, None),
+    "bearings": ("speed", {}, BEARINGS),
+    "epochs75": ("in_domain", {"max_epochs": 75}, None),
+}
+
+
+def run_ablation(name: str, data_dir: Path, channel: str = "dte_m", variant: str = "tsa_level") -> dict:
+    """The ``variant`` CNN on one split with one change (:data:`ABLATIONS`); same records otherwise."""
+    split, overrides, drive_train = ABLATIONS[name]
+    data = dataset("default", data_dir, channel=channel)
+    more = (second_draw(data_dir, channel) if drive_train is None else
+            second_draw(data_dir, channel, seed_offset=2 * EXTRA_SEED_OFFSET, tag="bearings", drive_train=drive_train))
+    train, test, _ = training_and_test(split, data, more)
+    rep, side = VARIANTS_ALL[variant]
+    cfg = TrainConfig(representation=rep, seed=SEED, operating_inputs=side, max_seconds=MAX_SECONDS, **overrides)
+    t0 = time.perf_counter()
+    model = train_cnn(train, cfg)
+    res = {"ablation": name, "channel": channel, "split": split, "variant": variant, "n_train": len(train),
+           "train_seconds": round(time.perf_counter() - t0, 1), "epochs": model.spec.training["epochs_run"],
+           "config": cfg.to_dict(), **summary(evaluate(test, model.predict(test)))}
+    log(f"ablation {name}: severity {res['accuracy']:.3f}, teeth {res['teeth_accuracy']:.3f}")
     return res
 
 
@@ -144,6 +184,15 @@ def tables(results: list[dict]) -> str:
             ok = [v for v in VARIANTS if min(r["cnn"][v]["test"]["accuracy"], r["cnn"][v]["test"]["teeth_accuracy"])
                   >= TARGETS[name]]
             met.append(f"{res['channel']} / {name}: " + (", ".join(ok) if ok else "none"))
+    abl = sorted((WHERE / "ablations").glob("*.json"))
+    if abl:
+        rows += ["", "One-run ablations (`--ablation NAME`, the `tsa_level` CNN unless stated):", "",
+                 "| ablation | channel | split | training records | severity acc. % | teeth acc. % | train s |",
+                 "|---|---|---|---|---|---|---|"]
+        for path in abl:
+            a = json.loads(path.read_text())
+            rows.append(f"| {a['ablation']} ({a['variant']}) | {a['channel']} | {a['split']} | {a['n_train']} | "
+                        f"{100 * a['accuracy']:.1f} | {100 * a['teeth_accuracy']:.1f} | {a['train_seconds']:.0f} |")
     rows += ["", f"Targets (in-domain {TARGETS['in_domain']:.0%}, cross-condition {TARGETS['speed']:.0%}, both "
              "tasks) met by: " + "; ".join(met) + "."]
     return "\n".join(rows) + "\n"
@@ -155,9 +204,10 @@ def main(argv=None) -> int:
     ap.add_argument("--data-dir", type=Path, default=OUT / "data", help="where the generated datasets live")
     ap.add_argument("--jobs", type=int, default=1, help="processes for the feature table")
     ap.add_argument("--tables", action="store_true", help="write the RESULTS.md table from the stored runs")
+    ap.add_argument("--ablation", choices=tuple(ABLATIONS), help="one ablation run on the transmission error")
     args = ap.parse_args(argv)
-    if args.channel is None and not args.tables:
-        ap.error("give --channel or --tables")
+    if args.channel is None and not args.tables and args.ablation is None:
+        ap.error("give --channel, --ablation or --tables")
     import torch
 
     torch.set_num_threads(1)
@@ -168,6 +218,10 @@ def main(argv=None) -> int:
         res["seconds"] = round(time.perf_counter() - t0, 1)
         (WHERE / f"{args.channel}.json").write_text(json.dumps(res, indent=1))
         log(f"wrote {WHERE / (args.channel + '.json')}")
+    if args.ablation:
+        res = run_ablation(args.ablation, args.data_dir)
+        (WHERE / "ablations").mkdir(exist_ok=True)
+        (WHERE / "ablations" / f"{res['channel']}_{args.ablation}.json").write_text(json.dumps(res, indent=1))
     if args.tables:
         results = [json.loads((WHERE / f"{c}.json").read_text()) for c in CHANNELS if (WHERE / f"{c}.json").is_file()]
         text = tables(results)
