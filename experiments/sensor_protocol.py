@@ -139,25 +139,29 @@ def run_channel(channel: str, data_dir: Path, jobs: int) -> dict:
     return res
 
 
-#: one-run ablations on the transmission error (``--ablation NAME``): protocol split, TrainConfig fields, and
-#: the draw that joins the default's training part (None: the second draw)
+#: one-run ablations on the transmission error (``--ablation NAME``): protocol split, TrainConfig fields,
+#: whether the default's training part is in the training set, and the extra draws of the default sweep
+#: that join it: (seed offset, tag, drive-train draws)
 BEARINGS = {"bearing_n_per_m": [3e7, 3e8]}   # moves the 2.2 kHz bearing-mesh mode to 1.3-3.6 kHz
-BEARINGS_SEED_OFFSET = 2 * EXTRA_SEED_OFFSET  # records unlike both the default's and the second draw's
+SECOND = ((EXTRA_SEED_OFFSET, "second_draw", None),)
+BEARING_DRAWS = ((2 * EXTRA_SEED_OFFSET, "bearings", BEARINGS), (3 * EXTRA_SEED_OFFSET, "bearings2", BEARINGS))
 ABLATIONS = {
-    "path": ("speed", {"augment": AugmentConfig(path_probability=0.5)}, None),
-    "lowpass": ("speed", {"augment": AugmentConfig(lowpass_probability=0.5)}, None),
-    "bearings": ("speed", {}, BEARINGS),
-    "epochs75": ("in_domain", {"max_epochs": 75}, None),
+    "path": ("speed", {"augment": AugmentConfig(path_probability=0.5)}, True, SECOND),
+    "lowpass": ("speed", {"augment": AugmentConfig(lowpass_probability=0.5)}, True, SECOND),
+    "bearings": ("speed", {}, True, BEARING_DRAWS[:1]),
+    "bearings_all": ("speed", {}, False, BEARING_DRAWS),
+    "epochs75": ("in_domain", {"max_epochs": 75}, True, SECOND),
 }
 
 
 def run_ablation(name: str, data_dir: Path, channel: str = "dte_m", variant: str = "tsa_level") -> dict:
-    """The ``variant`` CNN on one split with one change (:data:`ABLATIONS`); same records otherwise."""
-    split, overrides, drive_train = ABLATIONS[name]
+    """The ``variant`` CNN on one split with one change (:data:`ABLATIONS`); the same test records."""
+    split, overrides, with_default, draws = ABLATIONS[name]
     data = dataset("default", data_dir, channel=channel)
-    more = (second_draw(data_dir, channel) if drive_train is None else
-            second_draw(data_dir, channel, seed_offset=BEARINGS_SEED_OFFSET, tag="bearings", drive_train=drive_train))
-    train, test, _ = training_and_test(split, data, more)
+    parts = [second_draw(data_dir, channel, seed_offset=o, tag=t, drive_train=dt) for o, t, dt in draws]
+    train, test, _ = training_and_test(split, data, concat(parts))
+    if not with_default:  # only the draws' training rows
+        train = concat([p.subset(np.arange(len(p)) if split == "in_domain" else splits(p)[split][0]) for p in parts])
     rep, side = VARIANTS_ALL[variant]
     cfg = TrainConfig(representation=rep, seed=SEED, operating_inputs=side, max_seconds=MAX_SECONDS, **overrides)
     t0 = time.perf_counter()
