@@ -159,9 +159,11 @@ def run_ablation(name: str, data_dir: Path, channel: str = "dte_m", variant: str
     split, overrides, with_default, draws = ABLATIONS[name]
     data = dataset("default", data_dir, channel=channel)
     parts = [second_draw(data_dir, channel, seed_offset=o, tag=t, drive_train=dt) for o, t, dt in draws]
-    train, test, _ = training_and_test(split, data, concat(parts))
-    if not with_default:  # only the draws' training rows
+    if with_default:
+        train, test, _ = training_and_test(split, data, concat(parts))
+    else:  # only the draws' rows of the training condition; the default's test part as always
         train = concat([p.subset(np.arange(len(p)) if split == "in_domain" else splits(p)[split][0]) for p in parts])
+        test = data.subset(splits(data)[split][1])
     rep, side = VARIANTS_ALL[variant]
     cfg = TrainConfig(representation=rep, seed=SEED, operating_inputs=side, max_seconds=MAX_SECONDS, **overrides)
     t0 = time.perf_counter()
