@@ -169,3 +169,14 @@ def test_demo_sweep_matches_shipped_file():
 
     assert DEMO_TOML == (REPO / "experiments/sweeps/demo.toml").read_text()
     assert demo_sweep().fingerprint == load_sweep(REPO / "experiments/sweeps/demo.toml").fingerprint
+
+
+def test_classifier_protocol_sweeps_are_valid():
+    """Every sweep of the classifier protocols (experiments/models_sweeps/*.toml) passes the checks, and the
+    default pair stores the accelerometer first (what every protocol and the benchmark read) and the
+    transmission error (experiments/sensor_protocol.py), with noise on both."""
+    sweeps = {p.stem: load_sweep(p) for p in sorted((REPO / "experiments/models_sweeps").glob("*.toml"))}
+    assert {"default", "default_healthy", "rig", "nopath", "randomised"} <= set(sweeps)
+    for name in ("default", "default_healthy"):
+        assert sweeps[name].channels == ("acc_pinion_loa_m_s2", "dte_m")
+        assert sweeps[name].source["effects"]["noise"]["channels"] == "all"
