@@ -91,6 +91,8 @@ RIG_VARIANTS = ("tsa_op", CALIBRATED, "tsa")
 #: domain when the speed changes; the many-rig datasets already draw the path per record (2-5 kHz), and
 #: there the extra resonances cost 3-4 points (measured, experiments/RESULTS.md), so they stay off there
 RIG_AUGMENT = AugmentConfig(path_probability=0.5)
+#: cross-condition splits: name, label column, edge (train below, test at or above), unit
+CONDITION_SPLITS = (("speed", "speed_rpm", 1200.0, "rpm"), ("load", "torque_nm", 50.0, "N m"))
 MESH_ORDER = RepresentationSpec(kind="mesh_order", n_mesh_periods=256, max_order=4.0)
 
 
@@ -306,7 +308,7 @@ def cross_condition(data: SignalSet, x: np.ndarray, names, cfg, reps: list[str],
                     augment: AugmentConfig | None = None) -> dict:
     res = {}
     lab = data.labels
-    for split, col, edge, unit in (("speed", "speed_rpm", 1200.0, "rpm"), ("load", "torque_nm", 50.0, "N m")):
+    for split, col, edge, unit in CONDITION_SPLITS:
         log(f"cross-condition: {split} {prefix}")
         lo = np.nonzero(lab[col].to_numpy() < edge)[0]
         hi = np.nonzero(lab[col].to_numpy() >= edge)[0]

@@ -47,7 +47,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "experiments"))
 
-from eval_protocol import MAX_SECONDS, OUT, SEED, baseline_runs, cnn_run, dataset, log, strata, summary  # noqa: E402
+from eval_protocol import (CONDITION_SPLITS, MAX_SECONDS, OUT, SEED, baseline_runs, cnn_run, dataset, log,  # noqa: E402
+                           strata, summary)
 from eval_protocol import VARIANTS as VARIANTS_ALL  # noqa: E402
 from models_results_md import HEAD, KINDS, _row, insert_tables  # noqa: E402
 
@@ -61,7 +62,6 @@ from models.train import TrainConfig, stratified_split, train_cnn  # noqa: E402
 CHANNELS = {"acc_pinion_loa_m_s2": "housing accelerometer (pinion, line of action)",
             "dte_m": "transmission error (two shaft encoders)"}
 VARIANTS = ("tsa_op", "tsa_level")
-SPLITS = (("speed", "speed_rpm", 1200.0, "rpm"), ("load", "torque_nm", 50.0, "N m"))
 WHERE = OUT / "sensor"
 BEGIN, END = "<!-- sensor:begin (written by experiments/sensor_protocol.py) -->", "<!-- sensor:end -->"
 TARGETS = {"in_domain": 0.97, "speed": 0.85, "load": 0.85}
@@ -76,7 +76,7 @@ def splits(data) -> dict[str, tuple[np.ndarray, np.ndarray, str]]:
     tr, te = stratified_split(strata(data), 0.3, SEED)
     out = {"in_domain": (tr, te, "stratified 70/30")}
     lab = data.labels
-    for name, col, edge, unit in SPLITS:
+    for name, col, edge, unit in CONDITION_SPLITS:
         v = lab[col].to_numpy()
         out[name] = (np.nonzero(v < edge)[0], np.nonzero(v >= edge)[0],
                      f"train {col} < {edge:g} {unit}, test >= {edge:g} {unit}")
@@ -112,8 +112,14 @@ def training_and_test(split: str, data: SignalSet, more: SignalSet
     training condition across conditions), test records (the default's test part, as in eval_protocol) and
     the training rows of each part, for the feature table."""
     tr, te, _ = splits(data)[split]
-    tr_more = np.arange(len(more)) if split == "in_domain" else splits(more)[split][0]
+    tr_more = draw_training_rows(split, more)
     return concat([data.subset(tr), more.subset(tr_more)]), data.subset(te), (tr, te, tr_more)
+
+
+def draw_training_rows(split: str, draw: SignalSet) -> np.ndarray:
+    """The rows of an extra draw that join the training set: all of them in-domain (the test records are the
+    default's), those of the training condition across conditions."""
+    return np.arange(len(draw)) if split == "in_domain" else splits(draw)[split][0]
 
 
 def run_channel(channel: str, data_dir: Path, jobs: int) -> dict:
@@ -162,7 +168,7 @@ def run_ablation(name: str, data_dir: Path, channel: str = "dte_m", variant: str
     if with_default:
         train, test, _ = training_and_test(split, data, concat(parts))
     else:  # only the draws' rows of the training condition; the default's test part as always
-        train = concat([p.subset(np.arange(len(p)) if split == "in_domain" else splits(p)[split][0]) for p in parts])
+        train = concat([p.subset(draw_training_rows(split, p)) for p in parts])
         test = data.subset(splits(data)[split][1])
     rep, side = VARIANTS_ALL[variant]
     cfg = TrainConfig(representation=rep, seed=SEED, operating_inputs=side, max_seconds=MAX_SECONDS, **overrides)
