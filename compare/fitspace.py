@@ -26,8 +26,9 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 GRID_POINTS = 6
-#: measurement-chain effects: fitted in every comparison (gain, noise floor), never candidates
-CHAIN_EFFECTS = ("noise",)
+#: measurement-chain effects, never candidates: noise is fitted in every comparison (gain, noise floor); the
+#: encoders' error belongs to the transmission-error channel, not to the accelerometer a comparison reads
+CHAIN_EFFECTS = ("noise", "shaft_encoder_error")
 
 
 @dataclass(frozen=True)

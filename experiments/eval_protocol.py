@@ -162,8 +162,12 @@ def save_run(path: Path, metrics: dict, pred, data: SignalSet, title: str) -> No
 
 
 def cnn_run(train: SignalSet, tests: dict[str, SignalSet], variant: str, where: Path, *,
-            task: str = "multi", augment: AugmentConfig | None = None, allow_mismatch: bool = False) -> dict:
-    rep, operating = VARIANTS[variant] if variant in VARIANTS else (MESH_ORDER, ())
+            task: str = "multi", augment: AugmentConfig | None = None, allow_mismatch: bool = False,
+            variants: dict | None = None) -> dict:
+    """Train the CNN ``variant`` (of ``variants``, default :data:`VARIANTS`: name -> (representation, side
+    inputs); an unknown name is the mesh-order CNN) on ``train``, evaluate it on each of ``tests``."""
+    variants = VARIANTS if variants is None else variants
+    rep, operating = variants[variant] if variant in variants else (MESH_ORDER, ())
     # the epoch limit and early stopping end every run, not the wall-time budget: on a loaded machine the
     # default 900 s budget cut the 2 s one-rig runs short, which made the numbers depend on the load
     cfg = TrainConfig(representation=rep, task=task, augment=augment or AugmentConfig(), seed=SEED,

@@ -39,6 +39,7 @@ import argparse
 import json
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -56,23 +57,52 @@ from models.augment import AugmentConfig  # noqa: E402
 from models.baselines import feature_config_for, feature_table  # noqa: E402
 from models.evaluate import evaluate  # noqa: E402
 from models.data import SignalSet, concat  # noqa: E402
+from models.operating import HIGHPASS_ORDERS  # noqa: E402
+from models.representations import RepresentationSpec  # noqa: E402
 from models.sources import load_dataset  # noqa: E402
 from models.train import TrainConfig, stratified_split, train_cnn  # noqa: E402
 
 CHANNELS = {"acc_pinion_loa_m_s2": "housing accelerometer (pinion, line of action)",
             "dte_m": "transmission error (two shaft encoders)"}
-VARIANTS = ("tsa_op", "tsa_level")
+VARIANTS = ("tsa_op", "tsa_level", "tsa_lp_load", "tsa_te")
+def _tsa_lowpass(c: float) -> RepresentationSpec:
+    """The TSA of tsa_level low-passed below ``c`` mesh orders (models/representations.py)."""
+    return replace(VARIANTS_ALL["tsa_level"][0], lowpass_mesh_orders=c)
+
+
+#: the side inputs of tsa_level without the speed (across speeds the speed input is out of its training range)
+NO_SPEED = ("torque_nm", "signal_rms")
+#: CNN variants of this protocol: eval_protocol's; ``tsa_lp_load``: the TSA low-passed below 1.25 mesh orders with
+#: the load and the record's RMS as side inputs, not the speed; ``tsa_te``: as ``tsa_lp_load``, but the record
+#: high-passed at 2.5 pinion orders first and its RMS taken above them (``signal_rms_hp``), so that the encoders'
+#: once-per-revolution errors reach neither input (why: RESULTS.md, sensor section)
+SENSOR_VARIANTS = {"tsa_op": VARIANTS_ALL["tsa_op"], "tsa_level": VARIANTS_ALL["tsa_level"],
+                   "tsa_lp_load": (_tsa_lowpass(1.25), NO_SPEED),
+                   "tsa_te": (replace(_tsa_lowpass(1.25), highpass_orders=HIGHPASS_ORDERS),
+                              ("torque_nm", "signal_rms_hp"))}
+#: the variants each channel runs (the low-passed one is a transmission-error model: on the accelerometer the
+#: pit's quasi-static dip is not what the sensor sees)
+CHANNEL_VARIANTS = {"acc_pinion_loa_m_s2": ("tsa_op", "tsa_level"), "dte_m": VARIANTS}
 WHERE = OUT / "sensor"
 BEGIN, END = "<!-- sensor:begin (written by experiments/sensor_protocol.py) -->", "<!-- sensor:end -->"
 TARGETS = {"in_domain": 0.97, "speed": 0.85, "load": 0.85}
 SWEEPS = ROOT / "experiments" / "models_sweeps"
+#: model selection for the speed split without its test records: inside its training condition (< 1200 rpm),
+#: train below 900 rpm and test at 900-1200 rpm (name, column, edge, top, unit)
+INNER_SPEED = ("speed_inner", "speed_rpm", 900.0, 1200.0, "rpm")
 #: seed offset of the second draw of the default sweep (more training records: the learning curve of
 #: RESULTS.md still rises at 838 training records, the teeth accuracy by ~4 points per doubling)
 EXTRA_SEED_OFFSET = 100
+#: cross-physics on the transmission error: the default's records measured by encoders with disc eccentricity
+#: (datagen/effects/shaft_encoder_error.py): 10-60 arcsec on each shaft (5-10 um mounting eccentricity on a disc read
+#: at ~30 mm), phases uniform; the same records otherwise (seed offset 0)
+ENCODERS = {"shaft_encoder_error": {"pinion_rad": [5e-5, 3e-4], "wheel_rad": [5e-5, 3e-4],
+                              "pinion_phase_rad": [-3.14159, 3.14159], "wheel_phase_rad": [-3.14159, 3.14159]}}
 
 
-def splits(data) -> dict[str, tuple[np.ndarray, np.ndarray, str]]:
-    """name -> (train rows, test rows, rule) of the three protocols."""
+def splits(data, inner: bool = False) -> dict[str, tuple[np.ndarray, np.ndarray, str]]:
+    """name -> (train rows, test rows, rule) of the three protocols; ``inner``: also the model-selection split
+    inside the speed split's training condition (:data:`INNER_SPEED`), which never sees its test records."""
     tr, te = stratified_split(strata(data), 0.3, SEED)
     out = {"in_domain": (tr, te, "stratified 70/30")}
     lab = data.labels
@@ -80,14 +110,21 @@ def splits(data) -> dict[str, tuple[np.ndarray, np.ndarray, str]]:
         v = lab[col].to_numpy()
         out[name] = (np.nonzero(v < edge)[0], np.nonzero(v >= edge)[0],
                      f"train {col} < {edge:g} {unit}, test >= {edge:g} {unit}")
+    if inner:
+        name, col, edge, top, unit = INNER_SPEED
+        v = lab[col].to_numpy()
+        out[name] = (np.nonzero(v < edge)[0], np.nonzero((v >= edge) & (v < top))[0],
+                     f"train {col} < {edge:g} {unit}, test {edge:g}-{top:g} {unit}")
     return out
 
 
 def second_draw(data_dir: Path, channel: str, *, seed_offset: int = EXTRA_SEED_OFFSET, tag: str = "second_draw",
-                drive_train: dict | None = None) -> SignalSet:
+                drive_train: dict | None = None, effects: dict | None = None) -> SignalSet:
     """Another draw of the default sweep (its seeds + ``seed_offset``): same classes and physics (but for
-    ``drive_train`` fields given as sweep draws, e.g. ``{"bearing_n_per_m": [3e7, 3e8]}``), other records;
-    generated once into ``data_dir / f"{part}_{tag}"``, then read."""
+    ``drive_train`` fields given as sweep draws, e.g. ``{"bearing_n_per_m": [3e7, 3e8]}``, and ``effects``
+    tables added after the sweep's own, e.g. ``{"shaft_encoder_error": {...}}``), other records (with
+    ``seed_offset = 0`` the same records, each effect drawing from its own stream: only the added effects
+    differ); generated once into ``data_dir / f"{part}_{tag}"``, then read."""
     from datagen.generate import generate
     from datagen.sweep import sweep_from_dict
     from gearpit.tomlio import read_toml
@@ -98,6 +135,7 @@ def second_draw(data_dir: Path, channel: str, *, seed_offset: int = EXTRA_SEED_O
         doc["sweep"]["seed"] += seed_offset
         doc["sweep"]["name"] += "-" + tag.replace("_", "-")
         doc.setdefault("drive_train", {}).update(drive_train or {})
+        doc.setdefault("effects", {}).update(effects or {})
         out = data_dir / f"{part}_{tag}"
         if not (out / "index.parquet").is_file():
             log(f"generating {out.name}")
@@ -111,7 +149,7 @@ def training_and_test(split: str, data: SignalSet, more: SignalSet
     """Training records (the default's training part + ``more``'s: all of it in-domain, its rows of the
     training condition across conditions), test records (the default's test part, as in eval_protocol) and
     the training rows of each part, for the feature table."""
-    tr, te, _ = splits(data)[split]
+    tr, te, _ = splits(data, inner=True)[split]
     tr_more = draw_training_rows(split, more)
     return concat([data.subset(tr), more.subset(tr_more)]), data.subset(te), (tr, te, tr_more)
 
@@ -119,29 +157,77 @@ def training_and_test(split: str, data: SignalSet, more: SignalSet
 def draw_training_rows(split: str, draw: SignalSet) -> np.ndarray:
     """The rows of an extra draw that join the training set: all of them in-domain (the test records are the
     default's), those of the training condition across conditions."""
-    return np.arange(len(draw)) if split == "in_domain" else splits(draw)[split][0]
+    return np.arange(len(draw)) if split == "in_domain" else splits(draw, inner=True)[split][0]
 
 
-def run_channel(channel: str, data_dir: Path, jobs: int) -> dict:
+def run_channel(channel: str, data_dir: Path, jobs: int, variants: tuple[str, ...] | None = None) -> dict:
+    """The three protocols on ``channel``: every CNN variant of the channel (or only ``variants``, merged
+    into the stored results, whose baselines are kept) and the baselines."""
+    only = variants is not None
+    variants = variants or CHANNEL_VARIANTS[channel]
+    stored = WHERE / f"{channel}.json"
+    res = json.loads(stored.read_text()) if only and stored.is_file() else \
+        {"channel": channel, "label": CHANNELS[channel], "protocols": {}}
     data = dataset("default", data_dir, channel=channel)
     more = second_draw(data_dir, channel)
-    both = concat([data, more])
-    cfg = feature_config_for(both)
-    log(f"feature table of default + second draw / {channel} ({len(both)} records)")
-    x, names = feature_table(both, cfg, n_jobs=jobs)
-    x_data, x_more = x[:len(data)], x[len(data):]
-    res = {"channel": channel, "label": CHANNELS[channel], "protocols": {}}
+    need_baselines = any("baselines" not in res["protocols"].get(n, {}) for n in splits(data))
+    if need_baselines:
+        both = concat([data, more])
+        cfg = feature_config_for(both)
+        log(f"feature table of default + second draw / {channel} ({len(both)} records)")
+        x, names = feature_table(both, cfg, n_jobs=jobs)
+        x_data, x_more = x[:len(data)], x[len(data):]
     for name, (_, _, rule) in splits(data).items():
         log(f"{channel}: {name} ({rule})")
         train, test, (tr, te, tr_more) = training_and_test(name, data, more)
-        x_train = np.concatenate([x_data[tr], x_more[tr_more]])
         where = WHERE / channel / name
-        r = {"rule": rule, "n_train": len(train), "n_test": int(te.size), "cnn": {}}
-        for v in VARIANTS:
-            r["cnn"][v] = cnn_run(train, {"test": test}, v, where / f"cnn_{v}")
-        r["baselines"] = baseline_runs(train, x_train, {"test": (test, x_data[te])}, names, cfg, where)
-        res["protocols"][name] = r
-        (WHERE / f"{channel}.json").write_text(json.dumps(res, indent=1))  # partial results survive
+        r = res["protocols"].setdefault(name, {})
+        r.update({"rule": rule, "n_train": len(train), "n_test": int(te.size)})
+        r.setdefault("cnn", {})
+        for v in variants:
+            r["cnn"][v] = cnn_run(train, {"test": test}, v, where / f"cnn_{v}", variants=SENSOR_VARIANTS)
+        if "baselines" not in r:
+            x_train = np.concatenate([x_data[tr], x_more[tr_more]])
+            r["baselines"] = baseline_runs(train, x_train, {"test": (test, x_data[te])}, names, cfg, where)
+        stored.write_text(json.dumps(res, indent=1))  # partial results survive
+    return res
+
+
+def run_encoders(data_dir: Path, jobs: int, variants: tuple[str, ...] | None = None) -> dict:
+    """Cross-physics on the transmission error: trained on the in-domain training records (exact rotation plus
+    noise), tested on the default's test records as they are and as encoders with disc eccentricity measure
+    them (:data:`ENCODERS`; the same records otherwise). Stored in ``WHERE / "dte_m_encoders.json"``; with
+    ``variants``, only those CNNs are (re)trained and the rest kept."""
+    channel = "dte_m"
+    data = dataset("default", data_dir, channel=channel)
+    more = second_draw(data_dir, channel)
+    enc = second_draw(data_dir, channel, seed_offset=0, tag="encoders", effects=ENCODERS)
+    key = ["seed", "sample_index", "severity", "speed_rpm"]
+    if not data.labels[key].reset_index(drop=True).equals(enc.labels[key].reset_index(drop=True)):
+        raise RuntimeError("the encoder draw is not record for record the default dataset")
+    train, test, (tr, te, tr_more) = training_and_test("in_domain", data, more)
+    tests = {"test": test, "test_encoders": enc.subset(te)}
+    stored = WHERE / f"{channel}_encoders.json"
+    res = json.loads(stored.read_text()) if stored.is_file() else {}
+    res.update({"channel": channel, "label": CHANNELS[channel], "n_train": len(train), "n_test": int(te.size),
+                "rule": "train on the in-domain training records, test on the test records without and with "
+                        "encoder eccentricity (10-60 arcsec per shaft)"})
+    res.setdefault("cnn", {})
+    where = WHERE / channel / "encoders"
+    for v in variants or CHANNEL_VARIANTS[channel]:
+        res["cnn"][v] = cnn_run(train, tests, v, where / f"cnn_{v}", variants=SENSOR_VARIANTS)
+        stored.write_text(json.dumps(res, indent=1))
+    if "baselines" not in res:
+        both = concat([data, more])
+        cfg = feature_config_for(both)
+        log(f"feature table of default + second draw + encoder test records / {channel}")
+        x, names = feature_table(concat([both, tests["test_encoders"]]), cfg, n_jobs=jobs)
+        x_data, x_more, x_enc = x[:len(data)], x[len(data):len(both)], x[len(both):]
+        x_train = np.concatenate([x_data[tr], x_more[tr_more]])
+        res["baselines"] = baseline_runs(train, x_train, {"test": (test, x_data[te]),
+                                                           "test_encoders": (tests["test_encoders"], x_enc)},
+                                         names, cfg, where)
+        stored.write_text(json.dumps(res, indent=1))
     return res
 
 
@@ -152,6 +238,24 @@ BEARINGS = {"bearing_n_per_m": [3e7, 3e8]}   # moves the 2.2 kHz bearing-mesh mo
 SECOND = ((EXTRA_SEED_OFFSET, "second_draw", None),)
 BEARING_DRAWS = ((2 * EXTRA_SEED_OFFSET, "bearings", BEARINGS), (3 * EXTRA_SEED_OFFSET, "bearings2", BEARINGS))
 ABLATIONS = {
+    "tsa_lp2": ("speed", {"representation": _tsa_lowpass(2.0)}, True, SECOND),
+    "tsa_lp1.25": ("speed", {"representation": _tsa_lowpass(1.25)}, True, SECOND),
+    "tsa_lp1.25_bearings_all": ("speed", {"representation": _tsa_lowpass(1.25)}, False, BEARING_DRAWS),
+    "tsa_lp2_bearings_all": ("speed", {"representation": _tsa_lowpass(2.0)}, False, BEARING_DRAWS),
+    "tsa_lp1.25_nospeed": ("speed", {"representation": _tsa_lowpass(1.25), "operating_inputs": NO_SPEED}, True,
+                           SECOND),
+    "nospeed": ("speed", {"operating_inputs": NO_SPEED}, True, SECOND),
+    "tsa_lp1.25_nospeed_bearings_all": ("speed", {"representation": _tsa_lowpass(1.25), "operating_inputs": NO_SPEED},
+                                        False, BEARING_DRAWS),
+    "nospeed_bearings_all": ("speed", {"operating_inputs": NO_SPEED}, False, BEARING_DRAWS),
+    "inner_tsa_level": ("speed_inner", {}, True, SECOND),
+    "inner_nospeed": ("speed_inner", {"operating_inputs": NO_SPEED}, True, SECOND),
+    "inner_tsa_lp2_nospeed": ("speed_inner", {"representation": _tsa_lowpass(2.0), "operating_inputs": NO_SPEED},
+                              True, SECOND),
+    "inner_tsa_lp1.25_nospeed": ("speed_inner", {"representation": _tsa_lowpass(1.25),
+                                                 "operating_inputs": NO_SPEED}, True, SECOND),
+    "inner_tsa_lp1.25": ("speed_inner", {"representation": _tsa_lowpass(1.25)}, True, SECOND),
+    "tsa_lp2_nospeed": ("speed", {"representation": _tsa_lowpass(2.0), "operating_inputs": NO_SPEED}, True, SECOND),
     "path": ("speed", {"augment": AugmentConfig(path_probability=0.5)}, True, SECOND),
     "lowpass": ("speed", {"augment": AugmentConfig(lowpass_probability=0.5)}, True, SECOND),
     "bearings": ("speed", {}, True, BEARING_DRAWS[:1]),
@@ -169,14 +273,19 @@ def run_ablation(name: str, data_dir: Path, channel: str = "dte_m", variant: str
         train, test, _ = training_and_test(split, data, concat(parts))
     else:  # only the draws' rows of the training condition; the default's test part as always
         train = concat([p.subset(draw_training_rows(split, p)) for p in parts])
-        test = data.subset(splits(data)[split][1])
-    rep, side = VARIANTS_ALL[variant]
-    cfg = TrainConfig(representation=rep, seed=SEED, operating_inputs=side, max_seconds=MAX_SECONDS, **overrides)
+        test = data.subset(splits(data, inner=True)[split][1])
+    rep, side = SENSOR_VARIANTS[variant]
+    cfg = TrainConfig(**{"representation": rep, "seed": SEED, "operating_inputs": side, "max_seconds": MAX_SECONDS,
+                         **overrides})
     t0 = time.perf_counter()
     model = train_cnn(train, cfg)
     res = {"ablation": name, "channel": channel, "split": split, "variant": variant, "n_train": len(train),
            "train_seconds": round(time.perf_counter() - t0, 1), "epochs": model.spec.training["epochs_run"],
-           "config": cfg.to_dict(), **summary(evaluate(test, model.predict(test)))}
+           "config": cfg.to_dict()}
+    metrics = evaluate(test, model.predict(test))
+    res.update(summary(metrics))
+    res["breakdown_speed_rpm"] = metrics["breakdown"].get("speed_rpm")
+    res["confusion"] = {"severity": metrics["severity_class"], "teeth": metrics.get("teeth")}
     log(f"ablation {name}: severity {res['accuracy']:.3f}, teeth {res['teeth_accuracy']:.3f}")
     return res
 
@@ -187,16 +296,26 @@ def tables(results: list[dict]) -> str:
     for res in results:
         for name, r in res["protocols"].items():
             label = f"{name.replace('_', '-')} ({r['rule']}), {res['label']}"
-            for v in VARIANTS:
+            for v in (v for v in VARIANTS if v in r["cnn"]):
                 rows.append(_row(f"{label}: CNN ({v})", r["cnn"][v]["test"]))
             b = r["baselines"]
             best = b.get("best") or max(KINDS, key=lambda k: b[k]["test"]["accuracy"])
             rows.append(_row(f"{label}: best baseline ({best})", b[best]["test"]))
+    enc_file = WHERE / "dte_m_encoders.json"
+    if enc_file.is_file():
+        e = json.loads(enc_file.read_text())
+        for test, what in (("test", "without"), ("test_encoders", "with")):
+            label = f"cross-physics (trained without encoder errors, tested {what} them), {e['label']}"
+            for v in (v for v in VARIANTS if v in e["cnn"]):
+                rows.append(_row(f"{label}: CNN ({v})", e["cnn"][v][test]))
+            if "baselines" in e:
+                b = e["baselines"]
+                rows.append(_row(f"{label}: best baseline ({b['best']})", b[b["best"]][test]))
     met = []
     for res in results:
         for name, r in res["protocols"].items():
-            ok = [v for v in VARIANTS if min(r["cnn"][v]["test"]["accuracy"], r["cnn"][v]["test"]["teeth_accuracy"])
-                  >= TARGETS[name]]
+            ok = [v for v in VARIANTS if v in r["cnn"]
+                  and min(r["cnn"][v]["test"]["accuracy"], r["cnn"][v]["test"]["teeth_accuracy"]) >= TARGETS[name]]
             met.append(f"{res['channel']} / {name}: " + (", ".join(ok) if ok else "none"))
     abl = sorted((WHERE / "ablations").glob("*.json"))
     if abl:
@@ -216,24 +335,31 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--channel", choices=tuple(CHANNELS), help="run the protocol on this channel")
     ap.add_argument("--data-dir", type=Path, default=OUT / "data", help="where the generated datasets live")
+    ap.add_argument("--variant", action="append", choices=tuple(SENSOR_VARIANTS),
+                    help="with --channel: run only this CNN variant (repeatable), merged into the stored results")
     ap.add_argument("--jobs", type=int, default=1, help="processes for the feature table")
+    ap.add_argument("--encoders", action="store_true",
+                    help="cross-physics on the transmission error: tested with encoder eccentricity")
     ap.add_argument("--tables", action="store_true", help="write the RESULTS.md table from the stored runs")
-    ap.add_argument("--ablation", choices=tuple(ABLATIONS), help="one ablation run on the transmission error")
+    ap.add_argument("--ablation", choices=tuple(ABLATIONS),
+                    help="one ablation run, on --channel (default: the transmission error)")
     args = ap.parse_args(argv)
-    if args.channel is None and not args.tables and args.ablation is None:
-        ap.error("give --channel, --ablation or --tables")
+    if args.channel is None and not args.tables and args.ablation is None and not args.encoders:
+        ap.error("give --channel, --ablation, --encoders or --tables")
     import torch
 
     torch.set_num_threads(1)
     WHERE.mkdir(parents=True, exist_ok=True)
-    if args.channel:
+    if args.channel and not args.ablation and not args.encoders:
         t0 = time.perf_counter()
-        res = run_channel(args.channel, args.data_dir, args.jobs)
+        res = run_channel(args.channel, args.data_dir, args.jobs, tuple(args.variant) if args.variant else None)
         res["seconds"] = round(time.perf_counter() - t0, 1)
         (WHERE / f"{args.channel}.json").write_text(json.dumps(res, indent=1))
         log(f"wrote {WHERE / (args.channel + '.json')}")
+    if args.encoders:
+        run_encoders(args.data_dir, args.jobs, tuple(args.variant) if args.variant else None)
     if args.ablation:
-        res = run_ablation(args.ablation, args.data_dir)
+        res = run_ablation(args.ablation, args.data_dir, channel=args.channel or "dte_m")
         (WHERE / "ablations").mkdir(exist_ok=True)
         (WHERE / "ablations" / f"{res['channel']}_{args.ablation}.json").write_text(json.dumps(res, indent=1))
     if args.tables:

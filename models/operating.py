@@ -20,6 +20,13 @@ missing scale of the pit (default dataset: 87.6 % severity accuracy against
 path's gain (trained without the housing path, tested with it: 69.9 % against
 81.5 %). Use it only where the sensor path does not change.
 
+``signal_rms_hp`` is the same RMS after a high-pass at :data:`HIGHPASS_ORDERS`
+pinion orders (:func:`models.representations.highpass`): the level without the
+once-per-revolution lines of either shaft. On a measured transmission error
+those lines are mostly the encoders' disc eccentricity and the shafts' run-out
+(``datagen/effects/shaft_encoder_error.py``: 10-60 arcsec is 3-28 um, against a
+loaded transmission error of a few um), which say nothing of the teeth.
+
 The standardisation is fitted once on the training records and stored in the
 model (:attr:`models.spec.ModelSpec.operating_inputs`): ``{"columns": [...],
 "mean": [...], "std": [...]}``; an empty dict means no side inputs.
@@ -33,7 +40,10 @@ from gearpit.errors import require
 #: side inputs: label columns known at test time on a rig, and ``signal_rms``, the root-mean-square of
 #: the record in its own units (m/s^2 for the simulator), which makes the model depend on the sensor's
 #: calibration and on the transmission path (see the module docstring)
-OPERATING_COLUMNS: tuple[str, ...] = ("speed_rpm", "torque_nm", "signal_rms")
+OPERATING_COLUMNS: tuple[str, ...] = ("speed_rpm", "torque_nm", "signal_rms", "signal_rms_hp")
+#: cut-off of ``signal_rms_hp`` (pinion shaft orders): above the wheel's and the pinion's first order, below
+#: the lowest pinion order a tooth fault spreads to that matters (the difference signal starts at 3)
+HIGHPASS_ORDERS = 2.5
 
 
 def check_columns(columns) -> tuple[str, ...]:
@@ -49,6 +59,14 @@ def _column(data, c: str) -> np.ndarray:
     if c == "signal_rms":
         x = np.asarray(data.signals, dtype=float)
         return np.sqrt(np.mean((x - x.mean(axis=1, keepdims=True)) ** 2, axis=1))
+    if c == "signal_rms_hp":
+        from models.representations import highpass
+
+        fr = data.shaft_hz()
+        require(fr is not None, "labels", list(data.labels.columns), "a speed_rpm column (signal_rms_hp needs it)")
+        x = np.asarray(data.signals, dtype=float)
+        return np.array([np.sqrt(np.mean(highpass(x[i], data.fs_hz, fr[i], HIGHPASS_ORDERS) ** 2))
+                         for i in range(len(x))])
     labels = data.labels
     require(c in labels, "labels", list(labels.columns), f"a {c} column (the model takes it as a side input)")
     return labels[c].to_numpy(dtype=float)

@@ -168,8 +168,9 @@ def check_input(spec: ModelSpec, data: SignalSet, *, allow_mismatch: bool = Fals
         check_inputs(spec.representation_spec(), data.n_samples, data.fs_hz, data.shaft_hz(), data.mesh_cps(),
                      z_pinion=data.pair.z_pinion or None)
         for col in spec.operating_inputs.get("columns", ()):
-            require(col == "signal_rms" or col in data.labels, "labels", list(data.labels.columns),
-                    f"a {col} column (the model takes the operating point as a side input)")
+            need = "speed_rpm" if col == "signal_rms_hp" else col
+            require(col == "signal_rms" or need in data.labels, "labels", list(data.labels.columns),
+                    f"a {need} column (the model takes the operating point as a side input)")
     else:
         need = int(np.ceil(spec.n_samples * 0.5))
         require(data.n_samples >= need, "n_samples", data.n_samples,

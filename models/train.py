@@ -66,7 +66,8 @@ class TrainConfig:
     operating_inputs : tuple of str
         Side inputs of the network (:mod:`models.operating`): ``speed_rpm``,
         ``torque_nm`` (label columns), ``signal_rms`` (the record's level, which
-        binds the model to the sensor path); empty: none.
+        binds the model to the sensor path), ``signal_rms_hp`` (the level above
+        2.5 pinion orders, without the shafts' once-per-revolution lines); empty: none.
     seed : int
     threads : int
         torch CPU threads (at most 2). Default 1: on a shared, loaded machine two

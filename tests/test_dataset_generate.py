@@ -222,3 +222,35 @@ def test_second_channel_leaves_the_accelerometer_records_unchanged(reference, tm
     # the noise is a unit-variance draw, so its sample RMS over n samples scatters by 1 / sqrt(2 n) (3.5 %)
     sigma = 1.0 / np.sqrt(2 * te.shape[1])
     assert np.all(np.abs(ratio - 1.0) < 4 * sigma) and abs(ratio.mean() - 1.0) < 4 * sigma / np.sqrt(ratio.size)
+
+
+def test_encoder_errors_change_only_the_transmission_error_by_their_shaft_lines(reference, tmp_path):
+    """The cross-physics draw of the sensor protocol (experiments/sensor_protocol.py, ENCODERS): adding
+    [effects.shaft_encoder_error] leaves the accelerometer bytes unchanged (each effect draws its parameters from
+    its own stream, and effects apply in name order, so noise keeps its position and its draw) and changes the transmission error by exactly
+    rb1 a1 sin(theta1 + psi1) - rb2 a2 sin(theta2 + psi2) with the recorded draws (Remond 2000; theta from the
+    nominal speed: tolerance 1e-3 of the added error's peak plus float32 rounding of the stored record)."""
+    from datagen.geometry import spur_pair_example
+
+    channels = {"sweep__channels": ["acc_pinion_loa_m_s2", "dte_m"],
+                "effects__noise": {"snr_db": [20.0, 30.0], "channels": "all"}}
+    enc = {"pinion_rad": [5e-5, 3e-4], "wheel_rad": [5e-5, 3e-4], "pinion_phase_rad": [-3.0, 3.0],
+           "wheel_phase_rad": [-3.0, 3.0]}
+    plain, with_enc = base(**channels), base(**channels)
+    with_enc["effects"]["shaft_encoder_error"] = enc
+    generate(sweep_from_dict(plain), tmp_path / "plain", progress=False)
+    generate(sweep_from_dict(with_enc), tmp_path / "enc", progress=False)
+    rows = np.arange(sweep_from_dict(plain).n_samples)
+    acc = [dataset.load_signals(tmp_path / d, rows, "acc_pinion_loa_m_s2") for d in ("plain", "enc")]
+    assert np.array_equal(acc[0], acc[1])
+    te = [dataset.load_signals(tmp_path / d, rows, "dte_m").astype(float) for d in ("plain", "enc")]
+    idx = dataset.load_index(tmp_path / "enc").sort_values("sample_index")
+    pair = spur_pair_example()
+    rb1, rb2 = pair.base_radius_m("pinion"), pair.base_radius_m("wheel")
+    t = np.arange(te[0].shape[1]) / BASE["sweep"]["fs_hz"]
+    for i, (_, r) in enumerate(idx.iterrows()):
+        th1 = 2 * np.pi * r["speed_rpm"] / 60.0 * t
+        want = (rb1 * r["shaft_encoder_error_pinion_rad"] * np.sin(th1 + r["shaft_encoder_error_pinion_phase_rad"])
+                - rb2 * r["shaft_encoder_error_wheel_rad"] * np.sin(th1 * 29 / 100 + r["shaft_encoder_error_wheel_phase_rad"]))
+        tol = 1e-3 * np.abs(want).max() + 2 * np.finfo(np.float32).eps * np.abs(te[1][i]).max()
+        assert np.abs(te[1][i] - te[0][i] - want).max() < tol, i

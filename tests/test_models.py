@@ -1,4 +1,6 @@
 """Classifiers (models/): representations, training, determinism, save/load, input checks, baselines, metrics."""
+from dataclasses import replace
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -116,6 +118,69 @@ def test_tsa_difference_channel_drops_mesh_harmonics_and_keeps_the_rest():
     scale = (mesh + tone)[:256].std()  # channels are scaled by the TSA's standard deviation
     theta = 2 * np.pi * np.arange(256) / 256
     np.testing.assert_allclose(r2[1], 0.3 * np.cos(7 * theta) / scale, atol=1e-9)
+
+
+def test_tsa_lowpass_keeps_orders_below_the_cutoff_and_removes_those_above():
+    """lowpass_mesh_orders = 2, z = 13: orders <= 0.75 * 26 = 19.5 pass with gain 1, orders >= 26 are removed,
+    and the roll-off is the cosine 0.5 (1 + cos(pi (k - 19.5) / 6.5)) (order 23: 0.5 (1 + cos(pi 3.5 / 6.5))).
+    Record = orders 5 + 23 + 40; the low-passed TSA equals 5 + g(23) 23 (atol 1e-9 of the TSA scale)."""
+    fs, fr, z = 4096.0, 16.0, 13
+    t = np.arange(4096) / fs
+    x = sum(np.cos(2 * np.pi * k * fr * t + 0.2 * k) for k in (5, 23, 40))
+    spec = RepresentationSpec(kind="tsa", n_revs=16, samples_per_rev=256, lowpass_mesh_orders=2.0)
+    avg = represent(x[None, :], spec, fs_hz=fs, shaft_hz=fr, z_pinion=z)[0, 0]
+    theta = 2 * np.pi * np.arange(256) / 256
+    g23 = 0.5 * (1 + np.cos(np.pi * 3.5 / 6.5))
+    kept = np.cos(5 * theta + 1.0) + g23 * np.cos(23 * theta + 4.6)
+    np.testing.assert_allclose(avg, kept / kept.std(), atol=1e-9)
+    # no low-pass (the default): bit-identical to the spec without the field
+    plain = RepresentationSpec(kind="tsa", n_revs=16, samples_per_rev=256)
+    assert np.array_equal(represent(x[None, :], plain, fs_hz=fs, shaft_hz=fr, z_pinion=z),
+                          represent(x[None, :], replace(spec, lowpass_mesh_orders=0.0), fs_hz=fs, shaft_hz=fr,
+                                    z_pinion=z))
+
+
+def _encoder_like_record(fs=4096.0, fr=16.0, n=8192):
+    """Pinion order 1 (10 units) + wheel order 1 at pinion order 29/100 (30 units) + order 7 (1 unit): what a
+    transmission error measured with eccentric encoders looks like to a tooth-fault detector."""
+    t = np.arange(n) / fs
+    big = 10 * np.cos(2 * np.pi * fr * t + 0.4) + 30 * np.cos(2 * np.pi * 0.29 * fr * t - 1.0)
+    return big, np.cos(2 * np.pi * 7 * fr * t + 0.2), fs, fr
+
+
+def test_tsa_highpass_removes_both_shafts_once_per_revolution_lines():
+    """highpass_orders = 2.5: the TSA of (pinion order 1 x10 + wheel order 1 x30 + order 7 x1) is the order-7 tone
+    (correlation > 0.9999; the 8th-order zero-phase high-pass takes 64 dB off order 1 and > 140 dB off order 0.29,
+    and passes order 7 within 0.01 dB); without it the order-7 tone is under 5 % of the TSA's variance."""
+    big, tone, fs, fr = _encoder_like_record()
+    spec = RepresentationSpec(kind="tsa", n_revs=16, samples_per_rev=256, highpass_orders=2.5)
+    avg = represent((big + tone)[None, :], spec, fs_hz=fs, shaft_hz=fr, z_pinion=13)[0, 0]
+    ref = np.cos(7 * 2 * np.pi * np.arange(256) / 256 + 0.2)
+    assert np.corrcoef(avg, ref)[0, 1] > 0.9999
+    plain = represent((big + tone)[None, :], replace(spec, highpass_orders=0.0), fs_hz=fs, shaft_hz=fr,
+                      z_pinion=13)[0, 0]
+    assert np.corrcoef(plain, ref)[0, 1] ** 2 < 0.05
+
+
+def test_signal_rms_hp_is_the_level_without_the_shaft_lines():
+    """signal_rms_hp of (pinion order 1 x10 + wheel order 1 x30 + order 7 x1) is the order-7 tone's RMS 1/sqrt(2)
+    (within 1 %: the filter's edge transients over the first and last 1/25 s); signal_rms is 23 times that."""
+    from models.operating import fit_operating, _column
+
+    big, tone, fs, fr = _encoder_like_record()
+    d = SignalSet((big + tone)[None, :], fs, PairInfo("toy", 13, 29), pd.DataFrame({"speed_rpm": [fr * 60.0]}))
+    assert _column(d, "signal_rms_hp")[0] == pytest.approx(1 / np.sqrt(2), rel=0.01)
+    assert _column(d, "signal_rms")[0] > 20 * _column(d, "signal_rms_hp")[0]
+    assert fit_operating(d, ["signal_rms_hp"])["columns"] == ["signal_rms_hp"]
+
+
+@pytest.mark.parametrize("field", ["lowpass_mesh_orders", "highpass_orders"])
+@pytest.mark.parametrize("kind,value", [("tsa", -1.0), ("tsa", float("nan")), ("order", 2.0)])
+def test_tsa_order_filter_bad_values_are_refused(field, kind, value):
+    """A negative or NaN cut-off, or a cut-off on a representation without order filters: InputError naming
+    the field."""
+    with pytest.raises(InputError, match=field):
+        RepresentationSpec(kind=kind, **{field: value})
 
 
 def test_representations_are_normalised_per_signal():
