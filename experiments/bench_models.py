@@ -34,7 +34,11 @@ THROUGHPUT_TARGET = 500.0
 
 
 sys.path.insert(0, str(ROOT / "experiments"))
-from eval_protocol import VARIANTS, dataset  # noqa: E402
+from eval_protocol import VARIANTS as PROTOCOL_VARIANTS, dataset  # noqa: E402
+from sensor_protocol import SENSOR_VARIANTS  # noqa: E402
+
+#: CNN variants of both protocols (representation + side inputs)
+VARIANTS = {**PROTOCOL_VARIANTS, **SENSOR_VARIANTS}
 
 
 def default_dataset(data_dir: Path, channel: str | None = None):
@@ -45,7 +49,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data-dir", type=Path, default=ROOT / "experiments" / "out" / "models" / "data")
     ap.add_argument("--variant", default="tsa", choices=tuple(VARIANTS),
-                    help="CNN variant of experiments/eval_protocol.py (representation + side inputs)")
+                    help="CNN variant of experiments/eval_protocol.py or sensor_protocol.py (representation + side "
+                         "inputs; tsa_te: the transmission-error model)")
     ap.add_argument("--threads", type=int, default=1, choices=(1, 2))
     ap.add_argument("--channel", default=None,
                     help="stored channel of the default dataset (default: the first, the housing accelerometer; "

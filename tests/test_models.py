@@ -251,6 +251,23 @@ def test_save_load_gives_identical_predictions(trained, separable, tmp_path):
     assert loaded.spec == trained.spec
 
 
+def test_transmission_error_model_round_trips_its_filters_and_side_inputs(separable, tmp_path):
+    """A tsa_te-like CNN (TSA high-passed at 2.5 orders, low-passed below 1.25 mesh orders; side inputs torque and
+    signal_rms_hp) saves and reloads with the same spec (filters and side-input statistics included) and
+    identical probabilities."""
+    rep = RepresentationSpec(kind="tsa", n_revs=4, samples_per_rev=128, lowpass_mesh_orders=1.25,
+                             highpass_orders=2.5)
+    model = train_cnn(separable[0], _fast_config(representation=rep, max_epochs=2,
+                                                 operating_inputs=("torque_nm", "signal_rms_hp")))
+    save_model(model, tmp_path / "te")
+    loaded = load_model(tmp_path / "te")
+    assert loaded.spec == model.spec
+    assert loaded.spec.representation_spec().highpass_orders == 2.5
+    assert loaded.spec.operating_inputs["columns"] == ["torque_nm", "signal_rms_hp"]
+    np.testing.assert_array_equal(model.predict(separable[1]).severity_proba,
+                                  loaded.predict(separable[1]).severity_proba)
+
+
 def test_saved_spec_records_the_input(trained, tmp_path):
     """model.json holds fs, record length, gear pair, representation, class names and the training config."""
     import json

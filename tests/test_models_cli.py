@@ -160,8 +160,8 @@ def test_unknown_rate_csv_records_and_labels(tmp_path):
 
 
 def test_transmission_error_train_config_is_the_protocol_variant():
-    """experiments/train_te.toml (README, "Which sensor") is the ``tsa_level`` CNN of the sensor protocol:
-    the same representation and side inputs as experiments/eval_protocol.VARIANTS, so the README's command
+    """experiments/train_te.toml (README, "Which sensor") is the ``tsa_te`` CNN of the sensor protocol: the same
+    representation and side inputs as experiments/sensor_protocol.SENSOR_VARIANTS, so the README's command
     trains what RESULTS.md measured."""
     import sys
     from pathlib import Path
@@ -171,8 +171,8 @@ def test_transmission_error_train_config_is_the_protocol_variant():
 
     root = Path(__file__).resolve().parents[1]
     sys.path.insert(0, str(root / "experiments"))
-    from eval_protocol import VARIANTS
+    from sensor_protocol import SENSOR_VARIANTS
 
     cfg = TrainConfig.from_dict(read_toml(root / "experiments" / "train_te.toml")["train"])
-    rep, side = VARIANTS["tsa_level"]
+    rep, side = SENSOR_VARIANTS["tsa_te"]
     assert cfg.representation == rep and cfg.operating_inputs == side
