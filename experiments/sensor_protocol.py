@@ -73,13 +73,13 @@ def _tsa_lowpass(c: float) -> RepresentationSpec:
 #: the side inputs of tsa_level without the speed (across speeds the speed input is out of its training range)
 NO_SPEED = ("torque_nm", "signal_rms")
 #: CNN variants of this protocol: eval_protocol's; ``tsa_lp_load``: the TSA low-passed below 1.25 mesh orders with
-#: the load and the record's RMS as side inputs, not the speed; ``tsa_te``: as ``tsa_lp_load``, but the record
-#: high-passed at 2.5 pinion orders first and its RMS taken above them (``signal_rms_hp``), so that the encoders'
-#: once-per-revolution errors reach neither input (why: RESULTS.md, sensor section)
+#: the load and the record's RMS as side inputs, not the speed; ``tsa_te``: as ``tsa_lp_load``, but both shafts'
+#: first order removed from the record first and from its RMS (``signal_rms_no1x``), so that the encoders'
+#: once-per-revolution errors reach neither input (a high-pass at 2.5 orders did that too, but also took the low
+#: orders of the pit's dip: ablations te_hp_*; why: RESULTS.md, sensor section)
 SENSOR_VARIANTS = {"tsa_op": VARIANTS_ALL["tsa_op"], "tsa_level": VARIANTS_ALL["tsa_level"],
                    "tsa_lp_load": (_tsa_lowpass(1.25), NO_SPEED),
-                   "tsa_te": (replace(_tsa_lowpass(1.25), highpass_orders=HIGHPASS_ORDERS),
-                              ("torque_nm", "signal_rms_hp"))}
+                   "tsa_te": (replace(_tsa_lowpass(1.25), remove_shaft_1x=True), ("torque_nm", "signal_rms_no1x"))}
 #: the variants each channel runs (the low-passed one is a transmission-error model: on the accelerometer the
 #: pit's quasi-static dip is not what the sensor sees)
 CHANNEL_VARIANTS = {"acc_pinion_loa_m_s2": ("tsa_op", "tsa_level"), "dte_m": VARIANTS}
@@ -160,9 +160,10 @@ def draw_training_rows(split: str, draw: SignalSet) -> np.ndarray:
     return np.arange(len(draw)) if split == "in_domain" else splits(draw, inner=True)[split][0]
 
 
-def run_channel(channel: str, data_dir: Path, jobs: int, variants: tuple[str, ...] | None = None) -> dict:
-    """The three protocols on ``channel``: every CNN variant of the channel (or only ``variants``, merged
-    into the stored results, whose baselines are kept) and the baselines."""
+def run_channel(channel: str, data_dir: Path, jobs: int, variants: tuple[str, ...] | None = None,
+                only_splits: tuple[str, ...] | None = None) -> dict:
+    """The three protocols on ``channel`` (or ``only_splits``): every CNN variant of the channel (or only
+    ``variants``, merged into the stored results, whose baselines are kept) and the baselines."""
     only = variants is not None
     variants = variants or CHANNEL_VARIANTS[channel]
     stored = WHERE / f"{channel}.json"
@@ -178,6 +179,8 @@ def run_channel(channel: str, data_dir: Path, jobs: int, variants: tuple[str, ..
         x, names = feature_table(both, cfg, n_jobs=jobs)
         x_data, x_more = x[:len(data)], x[len(data):]
     for name, (_, _, rule) in splits(data).items():
+        if only_splits and name not in only_splits:
+            continue
         log(f"{channel}: {name} ({rule})")
         train, test, (tr, te, tr_more) = training_and_test(name, data, more)
         where = WHERE / channel / name
@@ -255,6 +258,12 @@ ABLATIONS = {
     "inner_tsa_lp1.25_nospeed": ("speed_inner", {"representation": _tsa_lowpass(1.25),
                                                  "operating_inputs": NO_SPEED}, True, SECOND),
     "inner_tsa_lp1.25": ("speed_inner", {"representation": _tsa_lowpass(1.25)}, True, SECOND),
+    # which of tsa_te's two changes against tsa_lp_load costs severity in-domain: the high-pass of the record, or
+    # the level above 2.5 orders as side input
+    "te_hp_rep_only": ("in_domain", {"representation": replace(_tsa_lowpass(1.25), highpass_orders=HIGHPASS_ORDERS),
+                                     "operating_inputs": NO_SPEED}, True, SECOND),
+    "te_hp_rms_only": ("in_domain", {"representation": _tsa_lowpass(1.25),
+                                     "operating_inputs": ("torque_nm", "signal_rms_hp")}, True, SECOND),
     "tsa_lp2_nospeed": ("speed", {"representation": _tsa_lowpass(2.0), "operating_inputs": NO_SPEED}, True, SECOND),
     "path": ("speed", {"augment": AugmentConfig(path_probability=0.5)}, True, SECOND),
     "lowpass": ("speed", {"augment": AugmentConfig(lowpass_probability=0.5)}, True, SECOND),
@@ -337,6 +346,8 @@ def main(argv=None) -> int:
     ap.add_argument("--data-dir", type=Path, default=OUT / "data", help="where the generated datasets live")
     ap.add_argument("--variant", action="append", choices=tuple(SENSOR_VARIANTS),
                     help="with --channel: run only this CNN variant (repeatable), merged into the stored results")
+    ap.add_argument("--split", action="append", choices=("in_domain", "speed", "load"),
+                    help="with --channel: run only this protocol (repeatable)")
     ap.add_argument("--jobs", type=int, default=1, help="processes for the feature table")
     ap.add_argument("--encoders", action="store_true",
                     help="cross-physics on the transmission error: tested with encoder eccentricity")
@@ -352,7 +363,8 @@ def main(argv=None) -> int:
     WHERE.mkdir(parents=True, exist_ok=True)
     if args.channel and not args.ablation and not args.encoders:
         t0 = time.perf_counter()
-        res = run_channel(args.channel, args.data_dir, args.jobs, tuple(args.variant) if args.variant else None)
+        res = run_channel(args.channel, args.data_dir, args.jobs, tuple(args.variant) if args.variant else None,
+                          tuple(args.split) if args.split else None)
         res["seconds"] = round(time.perf_counter() - t0, 1)
         (WHERE / f"{args.channel}.json").write_text(json.dumps(res, indent=1))
         log(f"wrote {WHERE / (args.channel + '.json')}")

@@ -52,7 +52,7 @@ def representation_batches(data: SignalSet, spec: ModelSpec, *, crops: tuple[flo
         sl = slice(i0, min(i0 + batch_size, len(data)))
         x = represent_crops(data.signals[sl], rep, fs_hz=data.fs_hz, crops=crops,
                             shaft_hz=None if fr is None else fr[sl], mesh_cps=None if mc is None else mc[sl],
-                            z_pinion=data.pair.z_pinion or None)
+                            z_pinion=data.pair.z_pinion or None, z_wheel=data.pair.z_wheel or None)
         x = torch.from_numpy(x.reshape(-1, *x.shape[2:]))
         yield sl, x, None if side is None else torch.from_numpy(np.repeat(side[sl], k, axis=0))
 

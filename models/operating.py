@@ -26,6 +26,10 @@ once-per-revolution lines of either shaft. On a measured transmission error
 those lines are mostly the encoders' disc eccentricity and the shafts' run-out
 (``datagen/effects/shaft_encoder_error.py``: 10-60 arcsec is 3-28 um, against a
 loaded transmission error of a few um), which say nothing of the teeth.
+``signal_rms_no1x`` is the RMS without just those two lines (least-squares
+sinusoids at the pinion's and the wheel's shaft frequency removed,
+:func:`models.representations.remove_shaft_lines`): the high-pass also takes
+the low-order content of a pit's dip.
 
 The standardisation is fitted once on the training records and stored in the
 model (:attr:`models.spec.ModelSpec.operating_inputs`): ``{"columns": [...],
@@ -40,7 +44,7 @@ from gearpit.errors import require
 #: side inputs: label columns known at test time on a rig, and ``signal_rms``, the root-mean-square of
 #: the record in its own units (m/s^2 for the simulator), which makes the model depend on the sensor's
 #: calibration and on the transmission path (see the module docstring)
-OPERATING_COLUMNS: tuple[str, ...] = ("speed_rpm", "torque_nm", "signal_rms", "signal_rms_hp")
+OPERATING_COLUMNS: tuple[str, ...] = ("speed_rpm", "torque_nm", "signal_rms", "signal_rms_hp", "signal_rms_no1x")
 #: cut-off of ``signal_rms_hp`` (pinion shaft orders): above the wheel's and the pinion's first order, below
 #: the lowest pinion order a tooth fault spreads to that matters (the difference signal starts at 3)
 HIGHPASS_ORDERS = 2.5
@@ -66,6 +70,16 @@ def _column(data, c: str) -> np.ndarray:
         require(fr is not None, "labels", list(data.labels.columns), "a speed_rpm column (signal_rms_hp needs it)")
         x = np.asarray(data.signals, dtype=float)
         return np.array([np.sqrt(np.mean(highpass(x[i], data.fs_hz, fr[i], HIGHPASS_ORDERS) ** 2))
+                         for i in range(len(x))])
+    if c == "signal_rms_no1x":
+        from models.representations import remove_shaft_lines
+
+        fr = data.shaft_hz()
+        require(fr is not None and data.pair.known, "speed_rpm / pair", None,
+                "the speed and both tooth counts (signal_rms_no1x removes both shafts' first order)")
+        ratio = data.pair.z_pinion / data.pair.z_wheel
+        x = np.asarray(data.signals, dtype=float)
+        return np.array([np.sqrt(np.mean(remove_shaft_lines(x[i], data.fs_hz, (fr[i], fr[i] * ratio)) ** 2))
                          for i in range(len(x))])
     labels = data.labels
     require(c in labels, "labels", list(labels.columns), f"a {c} column (the model takes it as a side input)")

@@ -31,7 +31,10 @@ same size.
     ``highpass_orders = h > 0`` the record is first high-passed at ``h`` pinion
     orders (:func:`highpass`): the once-per-revolution lines of both shafts
     (shaft-encoder eccentricity and run-out on a measured transmission error)
-    and their leakage into the TSA's comb are removed.
+    and their leakage into the TSA's comb are removed, but so is the low-order
+    content of a pit's dip. ``remove_shaft_1x = True`` removes only the two
+    lines themselves (:func:`remove_shaft_lines`: least-squares sinusoids at the
+    pinion's and the wheel's shaft frequency, needs ``z_wheel``).
 ``order``
     two channels, log order spectrum and log envelope order spectrum of an
     ``n_revs``-revolution segment, on the grid ``k / n_revs`` pinion shaft orders
@@ -107,6 +110,9 @@ class RepresentationSpec:
     highpass_orders : float
         ``tsa`` only: high-pass the record at this many pinion shaft orders
         first (0 = no high-pass).
+    remove_shaft_1x : bool
+        ``tsa`` only: subtract the pinion's and the wheel's first shaft order
+        from the record first.
     """
 
     kind: Kind = "order"
@@ -117,6 +123,7 @@ class RepresentationSpec:
     n_mesh_periods: int = 256
     lowpass_mesh_orders: float = 0.0
     highpass_orders: float = 0.0
+    remove_shaft_1x: bool = False
 
     def __post_init__(self):
         require(self.kind in KINDS, "representation.kind", self.kind, "one of: " + ", ".join(KINDS))
@@ -138,6 +145,10 @@ class RepresentationSpec:
                 "a number in [0, 10] pinion orders (0 = no high-pass)")
         require(hp == 0 or self.kind == "tsa", "representation.highpass_orders", hp,
                 f"0 for representation {self.kind!r} (only 'tsa' has an order high-pass)")
+        require(isinstance(self.remove_shaft_1x, (bool, np.bool_)), "representation.remove_shaft_1x",
+                self.remove_shaft_1x, "true or false")
+        require(not self.remove_shaft_1x or self.kind == "tsa", "representation.remove_shaft_1x",
+                self.remove_shaft_1x, f"false for representation {self.kind!r} (only 'tsa' removes shaft lines)")
 
     @classmethod
     def from_dict(cls, values: dict) -> "RepresentationSpec":
@@ -254,6 +265,20 @@ def highpass(x: np.ndarray, fs_hz: float, shaft_hz: float, orders: float) -> np.
     return scipy_fft.irfft(spec, n=2 * n, axis=-1)[..., :n]
 
 
+def remove_shaft_lines(x: np.ndarray, fs_hz: float, freqs_hz) -> np.ndarray:
+    """``x`` (1-D) less its least-squares fit by a constant and a sinusoid at each of ``freqs_hz`` (their
+    amplitudes and phases free): removal of stationary lines at known frequencies with no edge effects; other
+    content is left alone up to the regressors' overlap with it, ~1 / (pi df T) for a line df away in a record
+    of T seconds (0.6 % for 2.9 Hz over 2 s)."""
+    t = np.arange(x.size) / fs_hz
+    cols = [np.ones_like(t)]
+    for f in freqs_hz:
+        cols += [np.cos(2 * np.pi * f * t), np.sin(2 * np.pi * f * t)]
+    a = np.column_stack(cols)
+    coef, *_ = np.linalg.lstsq(a, x, rcond=None)
+    return x - a @ coef
+
+
 def _starts(size: int, n_seg: int, start: float, average: bool) -> list[int]:
     """Segment starts: one at ``start`` of the free room, or (``average``) one every half
     segment, the first shifted by ``start`` of at most half a segment."""
@@ -283,7 +308,7 @@ def _mean_amplitudes(x: np.ndarray, n_seg: int, crop_starts: list[list[int]], en
 
 
 def _crops(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, shaft_hz: float | None, mesh_cps: float | None,
-           starts: tuple[float, ...], speed_factor: float, z_pinion: int) -> np.ndarray:
+           starts: tuple[float, ...], speed_factor: float, z_pinion: int, z_wheel: int = 0) -> np.ndarray:
     """Representation of one record at every start of ``starts``: ``(len(starts), n_channels, length)``.
 
     The work that does not depend on the start (normalisation, the stretched record of ``envelope``,
@@ -307,6 +332,9 @@ def _crops(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, shaft_hz: floa
     if k == "tsa":
         if spec.highpass_orders > 0:
             x = highpass(x, fs_hz, shaft_hz * speed_factor, spec.highpass_orders)
+        if spec.remove_shaft_1x:
+            fr = shaft_hz * speed_factor
+            x = remove_shaft_lines(x, fs_hz, (fr, fr * z_pinion / z_wheel))
         # as many whole revolutions as the record holds, less one (room for the start phase), >= n_revs
         rev = fs_hz / (shaft_hz * speed_factor)
         n_rev = max(spec.n_revs, int(np.floor(x.size / rev)) - 1)
@@ -352,7 +380,7 @@ def _per_record(value, n: int, field: str) -> np.ndarray | None:
 
 
 def check_inputs(spec: RepresentationSpec, n_samples: int, fs_hz: float, shaft_hz=None, mesh_cps=None,
-                 *, z_pinion: int | None = None, max_speed_factor: float = 1.0) -> None:
+                 *, z_pinion: int | None = None, max_speed_factor: float = 1.0, z_wheel: int | None = None) -> None:
     """Raise :class:`InputError` unless records of ``n_samples`` samples can be represented.
 
     Checks that the speed (or mesh frequency) is given when needed, that one
@@ -364,6 +392,8 @@ def check_inputs(spec: RepresentationSpec, n_samples: int, fs_hz: float, shaft_h
     if spec.kind == "tsa":
         require(z_pinion is not None and int(z_pinion) >= 3, "z_pinion", z_pinion,
                 "the pinion tooth count (representation 'tsa' removes the mesh harmonics)")
+        require(not spec.remove_shaft_1x or (z_wheel is not None and int(z_wheel) >= 3), "z_wheel", z_wheel,
+                "the wheel tooth count (remove_shaft_1x removes the wheel's shaft line)")
     if spec.kind in ("tsa", "order"):
         require(shaft_hz is not None, "speed_rpm", None, f"the pinion speed (representation {spec.kind!r} needs it)")
         fr = np.atleast_1d(np.asarray(shaft_hz, dtype=float))
@@ -393,7 +423,7 @@ def check_inputs(spec: RepresentationSpec, n_samples: int, fs_hz: float, shaft_h
 
 
 def represent(signals: np.ndarray, spec: RepresentationSpec, *, fs_hz: float, shaft_hz=None, mesh_cps=None,
-              z_pinion: int | None = None, starts=0.0, speed_factors=1.0) -> np.ndarray:
+              z_pinion: int | None = None, starts=0.0, speed_factors=1.0, z_wheel: int | None = None) -> np.ndarray:
     """Representation of every record: array ``(n_records, spec.n_channels, spec.length)``, float32.
 
     Parameters
@@ -409,6 +439,8 @@ def represent(signals: np.ndarray, spec: RepresentationSpec, *, fs_hz: float, sh
         Mesh frequency in cycles per sample per record (``mesh_order``).
     z_pinion : int, optional
         Pinion tooth count (``tsa``).
+    z_wheel : int, optional
+        Wheel tooth count (``tsa`` with ``remove_shaft_1x``).
     starts : float or array_like
         Where each segment starts, as a fraction in [0, 1] of the free room.
     speed_factors : float or array_like
@@ -421,11 +453,12 @@ def represent(signals: np.ndarray, spec: RepresentationSpec, *, fs_hz: float, sh
     x = np.asarray(signals)
     require(x.ndim == 2 and x.shape[0] >= 1, "signals", x.shape, "a 2-D array (records, samples)")
     st = _per_record(starts, x.shape[0], "starts")
-    return _represent(x, spec, fs_hz, shaft_hz, mesh_cps, z_pinion, st[:, None], speed_factors)[:, 0]
+    return _represent(x, spec, fs_hz, shaft_hz, mesh_cps, z_pinion, st[:, None], speed_factors, z_wheel)[:, 0]
 
 
 def represent_crops(signals: np.ndarray, spec: RepresentationSpec, *, fs_hz: float, crops, shaft_hz=None,
-                    mesh_cps=None, z_pinion: int | None = None, speed_factors=1.0) -> np.ndarray:
+                    mesh_cps=None, z_pinion: int | None = None, speed_factors=1.0,
+                    z_wheel: int | None = None) -> np.ndarray:
     """Representation of every record at every start of ``crops`` (test-time crops): array
     ``(n_records, len(crops), spec.n_channels, spec.length)``, float32.
 
@@ -437,7 +470,7 @@ def represent_crops(signals: np.ndarray, spec: RepresentationSpec, *, fs_hz: flo
     ----------
     crops : sequence of float
         Segment starts, fractions in [0, 1] of the free room, the same for every record.
-    signals, spec, fs_hz, shaft_hz, mesh_cps, z_pinion, speed_factors
+    signals, spec, fs_hz, shaft_hz, mesh_cps, z_pinion, speed_factors, z_wheel
         As in :func:`represent`.
 
     Examples
@@ -457,11 +490,11 @@ def represent_crops(signals: np.ndarray, spec: RepresentationSpec, *, fs_hz: flo
     st = np.asarray(crops, dtype=float)
     require(st.ndim == 1 and st.size >= 1, "crops", st.shape, "a sequence of at least one fraction")
     return _represent(x, spec, fs_hz, shaft_hz, mesh_cps, z_pinion, np.broadcast_to(st, (x.shape[0], st.size)),
-                      speed_factors)
+                      speed_factors, z_wheel)
 
 
 def _represent(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, shaft_hz, mesh_cps, z_pinion,
-               starts: np.ndarray, speed_factors) -> np.ndarray:
+               starts: np.ndarray, speed_factors, z_wheel=None) -> np.ndarray:
     """Checked inputs -> ``(n_records, n_crops, channels, length)``; ``starts``: ``(n_records, n_crops)``."""
     n = x.shape[0]
     fr = _per_record(shaft_hz, n, "shaft_hz")
@@ -470,10 +503,10 @@ def _represent(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, shaft_hz, 
     require(bool(np.all((starts >= 0) & (starts <= 1))), "starts", "outside [0, 1]", "fractions in [0, 1]")
     require(bool(np.all(sf > 0)), "speed_factors", "non-positive", "factors > 0")
     check_inputs(spec, x.shape[1], fs_hz, fr, mc, z_pinion=z_pinion,
-                 max_speed_factor=float(max(sf.max(), 1.0 / sf.min())))
+                 max_speed_factor=float(max(sf.max(), 1.0 / sf.min())), z_wheel=z_wheel)
     out = np.empty((n, starts.shape[1], spec.n_channels, spec.length), dtype=np.float32)
     z = int(z_pinion) if z_pinion is not None else 0
     for i in range(n):
         out[i] = _crops(x[i], spec, float(fs_hz), None if fr is None else fr[i], None if mc is None else mc[i],
-                        tuple(float(v) for v in starts[i]), float(sf[i]), z)
+                        tuple(float(v) for v in starts[i]), float(sf[i]), z, int(z_wheel) if z_wheel else 0)
     return out

@@ -194,6 +194,7 @@ def train_cnn(data: SignalSet, config: TrainConfig = TrainConfig(), *, log=None)
     rep: RepresentationSpec = config.representation
     # validate before any work: every record must give a segment, with the speed-error margin
     check_inputs(rep, data.n_samples, data.fs_hz, data.shaft_hz(), data.mesh_cps(), z_pinion=data.pair.z_pinion or None,
+                 z_wheel=data.pair.z_wheel or None,
                  max_speed_factor=1.0 + config.augment.speed_error)
     if config.task == "binary":
         data = data.as_binary()
@@ -216,9 +217,10 @@ def train_cnn(data: SignalSet, config: TrainConfig = TrainConfig(), *, log=None)
                      operating_inputs=fit_operating(data.subset(tr), config.operating_inputs))
     side_all = operating_features(data, spec.operating_inputs)
     fr, mc, z = data.shaft_hz(), data.mesh_cps(), data.pair.z_pinion or None
+    zw = data.pair.z_wheel or None
     x_val = torch.from_numpy(represent(data.signals[va], rep, fs_hz=data.fs_hz,
                                        shaft_hz=None if fr is None else fr[va], mesh_cps=None if mc is None else mc[va],
-                                       z_pinion=z, starts=0.5))
+                                       z_pinion=z, starts=0.5, z_wheel=zw))
     yv = [torch.from_numpy(a[va]) for a in (y_cls, y_sev, y_teeth)]
     side_val = torch.from_numpy(side_all[va]) if config.operating_inputs else None
 
@@ -242,7 +244,7 @@ def train_cnn(data: SignalSet, config: TrainConfig = TrainConfig(), *, log=None)
                 xb, starts, speed = augment_batch(data.signals[b], config.augment, rng, fs_hz=data.fs_hz)
                 x = torch.from_numpy(represent(xb, rep, fs_hz=data.fs_hz, shaft_hz=None if fr is None else fr[b],
                                                mesh_cps=None if mc is None else mc[b], z_pinion=z, starts=starts,
-                                               speed_factors=speed))
+                                               speed_factors=speed, z_wheel=zw))
                 out = net(x, torch.from_numpy(side_all[b]) if config.operating_inputs else None)
                 loss = _loss(out, torch.from_numpy(y_cls[b]), torch.from_numpy(y_sev[b]),
                              torch.from_numpy(y_teeth[b]), config)

@@ -159,8 +159,9 @@ def test_unknown_rate_csv_records_and_labels(tmp_path):
     assert d.as_binary().labels["severity_class"].tolist() == ["damaged"] * 2 + ["healthy"] * 2
 
 
-def test_transmission_error_train_config_is_the_protocol_variant():
-    """experiments/train_te.toml (README, "Which sensor") is the ``tsa_te`` CNN of the sensor protocol: the same
+@pytest.mark.parametrize("config,variant", [("train_te.toml", "tsa_lp_load"), ("train_te_encoders.toml", "tsa_te")])
+def test_transmission_error_train_config_is_the_protocol_variant(config, variant):
+    """experiments/train_te*.toml (README, "Which sensor") are CNN variants of the sensor protocol: the same
     representation and side inputs as experiments/sensor_protocol.SENSOR_VARIANTS, so the README's command
     trains what RESULTS.md measured."""
     import sys
@@ -173,6 +174,6 @@ def test_transmission_error_train_config_is_the_protocol_variant():
     sys.path.insert(0, str(root / "experiments"))
     from sensor_protocol import SENSOR_VARIANTS
 
-    cfg = TrainConfig.from_dict(read_toml(root / "experiments" / "train_te.toml")["train"])
-    rep, side = SENSOR_VARIANTS["tsa_te"]
+    cfg = TrainConfig.from_dict(read_toml(root / "experiments" / config)["train"])
+    rep, side = SENSOR_VARIANTS[variant]
     assert cfg.representation == rep and cfg.operating_inputs == side
