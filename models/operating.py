@@ -21,14 +21,14 @@ path's gain (trained without the housing path, tested with it: 69.9 % against
 81.5 %). Use it only where the sensor path does not change.
 
 ``signal_rms_hp`` is the same RMS after a high-pass at :data:`HIGHPASS_ORDERS`
-pinion orders (:func:`models.representations.highpass`): the level without the
+pinion orders (:func:`models.order_filters.highpass`): the level without the
 once-per-revolution lines of either shaft. On a measured transmission error
 those lines are mostly the encoders' disc eccentricity and the shafts' run-out
 (``datagen/effects/shaft_encoder_error.py``: 10-60 arcsec is 3-28 um, against a
 loaded transmission error of a few um), which say nothing of the teeth.
 ``signal_rms_no1x`` is the RMS without just those two lines (least-squares
 sinusoids at the pinion's and the wheel's shaft frequency removed,
-:func:`models.representations.remove_shaft_lines`): the high-pass also takes
+:func:`models.order_filters.remove_shaft_lines`): the high-pass also takes
 the low-order content of a pit's dip.
 
 The standardisation is fitted once on the training records and stored in the
@@ -64,7 +64,7 @@ def _column(data, c: str) -> np.ndarray:
         x = np.asarray(data.signals, dtype=float)
         return np.sqrt(np.mean((x - x.mean(axis=1, keepdims=True)) ** 2, axis=1))
     if c == "signal_rms_hp":
-        from models.representations import highpass
+        from models.order_filters import highpass
 
         fr = data.shaft_hz()
         require(fr is not None, "labels", list(data.labels.columns), "a speed_rpm column (signal_rms_hp needs it)")
@@ -72,7 +72,7 @@ def _column(data, c: str) -> np.ndarray:
         return np.array([np.sqrt(np.mean(highpass(x[i], data.fs_hz, fr[i], HIGHPASS_ORDERS) ** 2))
                          for i in range(len(x))])
     if c == "signal_rms_no1x":
-        from models.representations import remove_shaft_lines
+        from models.order_filters import remove_shaft_lines
 
         fr = data.shaft_hz()
         require(fr is not None and data.pair.known, "speed_rpm / pair", None,

@@ -29,11 +29,11 @@ same size.
     resonances (fixed in Hz, hence at orders that fall as the speed rises) stay
     out of it at every speed where they sit above ``c`` mesh orders. With
     ``highpass_orders = h > 0`` the record is first high-passed at ``h`` pinion
-    orders (:func:`highpass`): the once-per-revolution lines of both shafts
+    orders (:func:`models.order_filters.highpass`): the once-per-revolution lines of both shafts
     (shaft-encoder eccentricity and run-out on a measured transmission error)
     and their leakage into the TSA's comb are removed, but so is the low-order
     content of a pit's dip. ``remove_shaft_1x = True`` removes only the two
-    lines themselves (:func:`remove_shaft_lines`: least-squares sinusoids at the
+    lines themselves (:func:`models.order_filters.remove_shaft_lines`: least-squares sinusoids at the
     pinion's and the wheel's shaft frequency, needs ``z_wheel``).
 ``order``
     two channels, log order spectrum and log envelope order spectrum of an
@@ -74,10 +74,10 @@ from dataclasses import asdict, dataclass, fields
 from typing import Literal
 
 import numpy as np
-from scipy import fft as scipy_fft
 from scipy.signal import resample
 
 from gearpit.errors import InputError, require, require_positive
+from models.order_filters import highpass, lowpass_gain, remove_shaft_lines
 
 Kind = Literal["raw", "envelope", "tsa", "order", "mesh_order"]
 KINDS: tuple[str, ...] = ("raw", "envelope", "tsa", "order", "mesh_order")
@@ -239,46 +239,6 @@ def _difference_mask(n_orders: int, z_pinion: int) -> np.ndarray:
     return (k > 2) & ~near_mesh
 
 
-def _lowpass_gain(n_orders: int, z_pinion: int, mesh_orders: float) -> np.ndarray:
-    """Gain per shaft order 0..n_orders-1: 1 below ``0.75 c z``, a cosine roll-off to 0 at ``c z``
-    (``c = mesh_orders``; 0 = all ones)."""
-    if mesh_orders <= 0:
-        return np.ones(n_orders)
-    k = np.arange(n_orders, dtype=float)
-    hi = mesh_orders * z_pinion
-    lo = 0.75 * hi
-    return np.where(k <= lo, 1.0, np.where(k >= hi, 0.0, 0.5 * (1 + np.cos(np.pi * (k - lo) / (hi - lo)))))
-
-
-def highpass(x: np.ndarray, fs_hz: float, shaft_hz: float, orders: float) -> np.ndarray:
-    """``x`` (last axis) high-passed at ``orders`` times ``shaft_hz`` with zero phase and the magnitude of an
-    8th-order Butterworth, ``|H|^2 = 1 / (1 + (f_c / f)^16)`` (a 4th-order one run forwards and backwards: a line
-    at a tenth of the cut-off loses 160 dB, one at 0.4 of it 64 dB, one at twice it 0.03 dB), applied in the
-    frequency domain to the record extended by its mirror image (continuous at both ends, so no edge step),
-    which costs two FFTs (0.31 ms for 12800 samples against 0.74 ms for scipy.signal.sosfiltfilt, measured)."""
-    n = x.shape[-1]
-    spec = scipy_fft.rfft(np.concatenate([x, x[..., ::-1]], axis=-1), axis=-1)
-    fc = orders * shaft_hz
-    f = np.arange(min(spec.shape[-1], int(np.ceil(4.0 * fc * 2 * n / fs_hz)) + 1)) * (fs_hz / (2 * n))
-    with np.errstate(divide="ignore"):  # above 4 f_c the gain is 1 within 1e-19
-        spec[..., :f.size] *= 1.0 / np.sqrt(1.0 + (fc / f) ** 16)
-    return scipy_fft.irfft(spec, n=2 * n, axis=-1)[..., :n]
-
-
-def remove_shaft_lines(x: np.ndarray, fs_hz: float, freqs_hz) -> np.ndarray:
-    """``x`` (1-D) less its least-squares fit by a constant and a sinusoid at each of ``freqs_hz`` (their
-    amplitudes and phases free): removal of stationary lines at known frequencies with no edge effects; other
-    content is left alone up to the regressors' overlap with it, ~1 / (pi df T) for a line df away in a record
-    of T seconds (0.6 % for 2.9 Hz over 2 s)."""
-    t = np.arange(x.size) / fs_hz
-    cols = [np.ones_like(t)]
-    for f in freqs_hz:
-        cols += [np.cos(2 * np.pi * f * t), np.sin(2 * np.pi * f * t)]
-    a = np.column_stack(cols)
-    coef, *_ = np.linalg.lstsq(a, x, rcond=None)
-    return x - a @ coef
-
-
 def _starts(size: int, n_seg: int, start: float, average: bool) -> list[int]:
     """Segment starts: one at ``start`` of the free room, or (``average``) one every half
     segment, the first shifted by ``start`` of at most half a segment."""
@@ -347,7 +307,7 @@ def _crops(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, shaft_hz: floa
         comb = np.stack([np.interp(bins, idx, c.real, right=0.0) + 1j * np.interp(bins, idx, c.imag, right=0.0)
                          for c in spec_c])
         if spec.lowpass_mesh_orders > 0:
-            comb = comb * _lowpass_gain(comb.shape[1], z_pinion, spec.lowpass_mesh_orders)
+            comb = comb * lowpass_gain(comb.shape[1], z_pinion, spec.lowpass_mesh_orders)
         avg = np.fft.irfft(comb, n=spec.samples_per_rev, axis=-1)
         diff = np.fft.irfft(comb * _difference_mask(comb.shape[1], z_pinion), n=spec.samples_per_rev, axis=-1)
         # both scaled by the TSA's standard deviation: the difference keeps its level relative to the mesh tone
