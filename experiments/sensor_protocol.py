@@ -236,7 +236,7 @@ def run_encoders(data_dir: Path, jobs: int, variants: tuple[str, ...] | None = N
 
 #: one-run ablations on the transmission error (``--ablation NAME``): protocol split, TrainConfig fields,
 #: whether the default's training part is in the training set, and the extra draws of the default sweep
-#: that join it: (seed offset, tag, drive-train draws)
+#: that join it: (seed offset, tag, drive-train draws[, added effects])
 BEARINGS = {"bearing_n_per_m": [3e7, 3e8]}   # moves the 2.2 kHz bearing-mesh mode to 1.3-3.6 kHz
 SECOND = ((EXTRA_SEED_OFFSET, "second_draw", None),)
 BEARING_DRAWS = ((2 * EXTRA_SEED_OFFSET, "bearings", BEARINGS), (3 * EXTRA_SEED_OFFSET, "bearings2", BEARINGS))
@@ -264,6 +264,9 @@ ABLATIONS = {
                                      "operating_inputs": NO_SPEED}, True, SECOND),
     "te_hp_rms_only": ("in_domain", {"representation": _tsa_lowpass(1.25),
                                      "operating_inputs": ("torque_nm", "signal_rms_hp")}, True, SECOND),
+    # training with encoder errors: the default's training part as it is, the second draw through eccentric encoders
+    "train_encoders": ("in_domain", {"representation": _tsa_lowpass(1.25), "operating_inputs": NO_SPEED}, True,
+                       ((EXTRA_SEED_OFFSET, "second_draw_encoders", None, ENCODERS),)),
     "tsa_lp2_nospeed": ("speed", {"representation": _tsa_lowpass(2.0), "operating_inputs": NO_SPEED}, True, SECOND),
     "path": ("speed", {"augment": AugmentConfig(path_probability=0.5)}, True, SECOND),
     "lowpass": ("speed", {"augment": AugmentConfig(lowpass_probability=0.5)}, True, SECOND),
@@ -277,7 +280,8 @@ def run_ablation(name: str, data_dir: Path, channel: str = "dte_m", variant: str
     """The ``variant`` CNN on one split with one change (:data:`ABLATIONS`); the same test records."""
     split, overrides, with_default, draws = ABLATIONS[name]
     data = dataset("default", data_dir, channel=channel)
-    parts = [second_draw(data_dir, channel, seed_offset=o, tag=t, drive_train=dt) for o, t, dt in draws]
+    parts = [second_draw(data_dir, channel, seed_offset=o, tag=t, drive_train=dt, effects=fx[0] if fx else None)
+             for o, t, dt, *fx in draws]
     if with_default:
         train, test, _ = training_and_test(split, data, concat(parts))
     else:  # only the draws' rows of the training condition; the default's test part as always
@@ -294,6 +298,12 @@ def run_ablation(name: str, data_dir: Path, channel: str = "dte_m", variant: str
     metrics = evaluate(test, model.predict(test))
     res.update(summary(metrics))
     res["breakdown_speed_rpm"] = metrics["breakdown"].get("speed_rpm")
+    if split == "in_domain" and channel == "dte_m":  # also the same test records through eccentric encoders
+        enc = second_draw(data_dir, channel, seed_offset=0, tag="encoders", effects=ENCODERS)
+        enc_test = enc.subset(splits(data)[split][1])
+        res["test_encoders"] = summary(evaluate(enc_test, model.predict(enc_test)))
+        log(f"ablation {name} with encoder errors: severity {res['test_encoders']['accuracy']:.3f}, "
+            f"teeth {res['test_encoders']['teeth_accuracy']:.3f}")
     res["confusion"] = {"severity": metrics["severity_class"], "teeth": metrics.get("teeth")}
     log(f"ablation {name}: severity {res['accuracy']:.3f}, teeth {res['teeth_accuracy']:.3f}")
     return res
