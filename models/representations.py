@@ -133,18 +133,13 @@ class RepresentationSpec:
                     f"representation.{name}", v, f"an integer >= {lo}")
         require_positive("representation.max_order", self.max_order)
         require(self.samples_per_rev % 2 == 0, "representation.samples_per_rev", self.samples_per_rev, "an even integer")
-        lp = self.lowpass_mesh_orders
-        require(isinstance(lp, (int, float, np.integer, np.floating)) and not isinstance(lp, bool)
-                and np.isfinite(lp) and lp >= 0, "representation.lowpass_mesh_orders", lp,
-                "a number >= 0 (0 = no low-pass)")
-        require(lp == 0 or self.kind == "tsa", "representation.lowpass_mesh_orders", lp,
-                f"0 for representation {self.kind!r} (only 'tsa' has an order low-pass)")
-        hp = self.highpass_orders
-        require(isinstance(hp, (int, float, np.integer, np.floating)) and not isinstance(hp, bool)
-                and np.isfinite(hp) and 0 <= hp <= 10, "representation.highpass_orders", hp,
-                "a number in [0, 10] pinion orders (0 = no high-pass)")
-        require(hp == 0 or self.kind == "tsa", "representation.highpass_orders", hp,
-                f"0 for representation {self.kind!r} (only 'tsa' has an order high-pass)")
+        for name, top, what in (("lowpass_mesh_orders", np.inf, "a number >= 0 mesh orders (0 = no low-pass)"),
+                                ("highpass_orders", 10.0, "a number in [0, 10] pinion orders (0 = no high-pass)")):
+            v = getattr(self, name)
+            require(isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
+                    and np.isfinite(v) and 0 <= v <= top, f"representation.{name}", v, what)
+            require(v == 0 or self.kind == "tsa", f"representation.{name}", v,
+                    f"0 for representation {self.kind!r} (only 'tsa' has order filters)")
         require(isinstance(self.remove_shaft_1x, (bool, np.bool_)), "representation.remove_shaft_1x",
                 self.remove_shaft_1x, "true or false")
         require(not self.remove_shaft_1x or self.kind == "tsa", "representation.remove_shaft_1x",
