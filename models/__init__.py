@@ -5,6 +5,7 @@
 - ``unknown_rate``    records whose sampling rate is unknown (the SpectraQuest CSVs): mesh-frequency estimate
 - ``toy``             a small labelled toy signal set for tests, benchmarks and examples
 - ``representations`` network inputs: raw segment, envelope spectrum, TSA, order and mesh-order spectra
+- ``input_checks``    whether records can be represented (speed, tooth counts, segment length, Nyquist)
 - ``order_filters``   the TSA's order low-pass, a zero-phase order high-pass, removal of both shafts' first order
 - ``operating``       side inputs: known speed and load, the record's level (with or without the shaft lines)
 - ``augment``         training-time augmentation (crop/phase, gain, noise, speed error, polarity)
