@@ -240,23 +240,24 @@ def run_encoders(data_dir: Path, jobs: int, variants: tuple[str, ...] | None = N
 BEARINGS = {"bearing_n_per_m": [3e7, 3e8]}   # moves the 2.2 kHz bearing-mesh mode to 1.3-3.6 kHz
 SECOND = ((EXTRA_SEED_OFFSET, "second_draw", None),)
 BEARING_DRAWS = ((2 * EXTRA_SEED_OFFSET, "bearings", BEARINGS), (3 * EXTRA_SEED_OFFSET, "bearings2", BEARINGS))
+def _lp_load(c: float, **more) -> dict:
+    """TrainConfig overrides of tsa_lp_load with the low-pass at ``c`` mesh orders (and ``more`` fields)."""
+    return {"representation": _tsa_lowpass(c), "operating_inputs": NO_SPEED, **more}
+
+
 ABLATIONS = {
     "tsa_lp2": ("speed", {"representation": _tsa_lowpass(2.0)}, True, SECOND),
     "tsa_lp1.25": ("speed", {"representation": _tsa_lowpass(1.25)}, True, SECOND),
     "tsa_lp1.25_bearings_all": ("speed", {"representation": _tsa_lowpass(1.25)}, False, BEARING_DRAWS),
     "tsa_lp2_bearings_all": ("speed", {"representation": _tsa_lowpass(2.0)}, False, BEARING_DRAWS),
-    "tsa_lp1.25_nospeed": ("speed", {"representation": _tsa_lowpass(1.25), "operating_inputs": NO_SPEED}, True,
-                           SECOND),
+    "tsa_lp1.25_nospeed": ("speed", _lp_load(1.25), True, SECOND),
     "nospeed": ("speed", {"operating_inputs": NO_SPEED}, True, SECOND),
-    "tsa_lp1.25_nospeed_bearings_all": ("speed", {"representation": _tsa_lowpass(1.25), "operating_inputs": NO_SPEED},
-                                        False, BEARING_DRAWS),
+    "tsa_lp1.25_nospeed_bearings_all": ("speed", _lp_load(1.25), False, BEARING_DRAWS),
     "nospeed_bearings_all": ("speed", {"operating_inputs": NO_SPEED}, False, BEARING_DRAWS),
     "inner_tsa_level": ("speed_inner", {}, True, SECOND),
     "inner_nospeed": ("speed_inner", {"operating_inputs": NO_SPEED}, True, SECOND),
-    "inner_tsa_lp2_nospeed": ("speed_inner", {"representation": _tsa_lowpass(2.0), "operating_inputs": NO_SPEED},
-                              True, SECOND),
-    "inner_tsa_lp1.25_nospeed": ("speed_inner", {"representation": _tsa_lowpass(1.25),
-                                                 "operating_inputs": NO_SPEED}, True, SECOND),
+    "inner_tsa_lp2_nospeed": ("speed_inner", _lp_load(2.0), True, SECOND),
+    "inner_tsa_lp1.25_nospeed": ("speed_inner", _lp_load(1.25), True, SECOND),
     "inner_tsa_lp1.25": ("speed_inner", {"representation": _tsa_lowpass(1.25)}, True, SECOND),
     # which of tsa_te's two changes against tsa_lp_load costs severity in-domain: the high-pass of the record, or
     # the level above 2.5 orders as side input
@@ -265,18 +266,14 @@ ABLATIONS = {
     "te_hp_rms_only": ("in_domain", {"representation": _tsa_lowpass(1.25),
                                      "operating_inputs": ("torque_nm", "signal_rms_hp")}, True, SECOND),
     # training with encoder errors: the default's training part as it is, the second draw through eccentric encoders
-    "train_encoders": ("in_domain", {"representation": _tsa_lowpass(1.25), "operating_inputs": NO_SPEED}, True,
+    "train_encoders": ("in_domain", _lp_load(1.25), True,
                        ((EXTRA_SEED_OFFSET, "second_draw_encoders", None, ENCODERS),)),
     # run-to-run scatter of tsa_lp_load across speeds: other training seeds (initialisation, batches, augmentation)
-    "tsa_lp_load_seed1": ("speed", {"representation": _tsa_lowpass(1.25), "operating_inputs": NO_SPEED, "seed": 1},
-                          True, SECOND),
-    "tsa_lp_load_seed2": ("speed", {"representation": _tsa_lowpass(1.25), "operating_inputs": NO_SPEED, "seed": 2},
-                          True, SECOND),
-    "tsa_lp_load_in_domain_seed1": ("in_domain", {"representation": _tsa_lowpass(1.25), "operating_inputs": NO_SPEED,
-                                                  "seed": 1}, True, SECOND),
-    "tsa_lp_load_in_domain_seed2": ("in_domain", {"representation": _tsa_lowpass(1.25), "operating_inputs": NO_SPEED,
-                                                  "seed": 2}, True, SECOND),
-    "tsa_lp2_nospeed": ("speed", {"representation": _tsa_lowpass(2.0), "operating_inputs": NO_SPEED}, True, SECOND),
+    "tsa_lp_load_seed1": ("speed", _lp_load(1.25, seed=1), True, SECOND),
+    "tsa_lp_load_seed2": ("speed", _lp_load(1.25, seed=2), True, SECOND),
+    "tsa_lp_load_in_domain_seed1": ("in_domain", _lp_load(1.25, seed=1), True, SECOND),
+    "tsa_lp_load_in_domain_seed2": ("in_domain", _lp_load(1.25, seed=2), True, SECOND),
+    "tsa_lp2_nospeed": ("speed", _lp_load(2.0), True, SECOND),
     "path": ("speed", {"augment": AugmentConfig(path_probability=0.5)}, True, SECOND),
     "lowpass": ("speed", {"augment": AugmentConfig(lowpass_probability=0.5)}, True, SECOND),
     "bearings": ("speed", {}, True, BEARING_DRAWS[:1]),
