@@ -383,6 +383,9 @@ def attribute(ref: Reference, model, baseline_residual: np.ndarray, *, candidate
         n_sims += n
     if futures:
         executor.shutdown()
+    if calibration is not None:     # the drive train each candidate was fitted at (refitted ones keep theirs)
+        for c in results:
+            c.nuisance = c.nuisance or dict(calibration.values)
     results.sort(key=lambda c: -c.reduction)
     claimed = choose_claim(results, settings)
     explained = {k for c in results if c.claimed for k in c.explains}

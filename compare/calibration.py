@@ -76,11 +76,12 @@ the mesh damping to twice its value and raised the total error); this is also
 how :mod:`compare.attribution` fits such effects (at the calibrated nuisances
 of the periodic baseline).
 
-Switch, and why it is off by default
-------------------------------------
+Switch, and why it is not always on
+-----------------------------------
 ``gearpit compare --calibrate`` (``--no-calibrate``) or ``[calibration]
 enabled = true`` (``false``) in the model TOML (:mod:`compare.model`), which
-also chooses the parameters; :data:`CALIBRATE_BY_DEFAULT` is False. Measured on
+also chooses the parameters; :data:`CALIBRATE_BY_DEFAULT` is "auto": calibrate only when no registered effect
+explains the mismatch of the model as written (:mod:`compare.escalation`). Measured on
 the hidden-effect rigs of :mod:`compare.synthetic` (2 s, SNR 30 dB, every
 registered effect a candidate), calibrating first helps where a nuisance
 mismatch hides the effect (transmission_path: the model with the claimed
@@ -104,10 +105,11 @@ profile error and a tip relief both reshape the mesh harmonics and become
 twins, and the wider search only picks one of them by the noise. A tip relief
 still lands in its mirror minimum (5.1 um with mesh damping 0.092 against
 the rig's 10 um and 0.06). Time-stepped candidates are not refitted with the
-nuisances at all (a transient batch per nuisance step). So the calibration is
-a tool the user switches on, and the attribution's default is the model as
-written; on a rig whose drive train is far from the defaults it is the better
-choice (README, "On another rig").
+nuisances at all (a transient batch per nuisance step). So the default
+attributes against the model as written first and calibrates only when that
+leaves the mismatch unexplained (:mod:`compare.escalation`): on a rig whose
+drive train is far from the defaults the calibrated pass is the better one
+(README, "On another rig").
 
 References
 ----------
@@ -135,8 +137,9 @@ NUISANCES = {
     "bearing_damping_ratio": (0.01, 0.2),
 }
 DEFAULT_PARAMETERS = tuple(NUISANCES)
-#: whether a comparison calibrates when neither the model file nor the caller says (module docstring: why not)
-CALIBRATE_BY_DEFAULT = False
+#: whether a comparison calibrates when neither the model file nor the caller says: "auto", only when the model as
+#: written leaves the mismatch unexplained (compare.escalation; module docstring: why not always)
+CALIBRATE_BY_DEFAULT = "auto"
 
 
 def nuisance_parameter(name: str, default: float) -> FitParameter:

@@ -16,14 +16,16 @@ keys of its own::
     name = "eccentricity_pinion"
     amplitude_m = 2e-05
     [calibration]                           # optional: nuisance calibration (compare.calibration)
-    enabled = true                          # default false: the [drivetrain] values as they are
+    enabled = "auto"                        # default "auto"; true: always first; false: never
     parameters = ["mesh_damping_ratio", "bearing_n_per_m", "bearing_damping_ratio"]
 
 With ``[calibration] enabled = true`` (or ``gearpit compare --calibrate``) the
 drive-train nuisances named there are fitted to the measurement before the
-attribution (:mod:`compare.calibration`, which says why it is off by default),
-starting from the ``[drivetrain]`` values (or the defaults); the fitted values
-are reported and recorded in the ledger, not written back into this file.
+attribution (:mod:`compare.calibration`), starting from the ``[drivetrain]``
+values (or the defaults); with ``"auto"`` (the default) only when the model as
+written leaves the mismatch unexplained (:mod:`compare.escalation` says why);
+the fitted values are reported and recorded in the ledger, not written back
+into this file.
 
 A missing model file means the baseline: no effects, default drive train,
 sensor ``acc_pinion_loa_m_s2``.
@@ -80,8 +82,8 @@ class ComparisonModel:
         cal = d.get("calibration", {})
         require(isinstance(cal, dict), "model.calibration", cal, "a table")
         check_keys(cal, CALIBRATION_KEYS, "model.calibration")
-        require(isinstance(cal.get("enabled", True), bool), "model.calibration.enabled", cal.get("enabled"),
-                "true or false")
+        require(cal.get("enabled", True) in (True, False, "auto"), "model.calibration.enabled", cal.get("enabled"),
+                "true, false or \"auto\"")
         if "parameters" in cal:
             from compare.calibration import CalibrationSettings
 
@@ -140,12 +142,19 @@ class ComparisonModel:
         return d
 
     @property
-    def calibrates(self) -> bool:
-        """Whether the comparison calibrates the drive-train nuisances first (``[calibration] enabled``,
-        default :data:`compare.calibration.CALIBRATE_BY_DEFAULT`)."""
+    def calibration_mode(self):
+        """``[calibration] enabled``: True (calibrate first), False (never) or "auto" (only when the model as
+        written leaves the mismatch unexplained: :mod:`compare.escalation`); default
+        :data:`compare.calibration.CALIBRATE_BY_DEFAULT`."""
         from compare.calibration import CALIBRATE_BY_DEFAULT
 
-        return bool(self.calibration.get("enabled", CALIBRATE_BY_DEFAULT))
+        return self.calibration.get("enabled", CALIBRATE_BY_DEFAULT)
+
+    @property
+    def calibrates(self) -> bool:
+        """Whether a single comparison calibrates the drive-train nuisances first: only when the mode is True
+        ("auto" decides after an attribution, :mod:`compare.escalation`)."""
+        return self.calibration_mode is True
 
     def calibration_settings(self, seed: int = 0):
         """The :class:`compare.calibration.CalibrationSettings` of this model."""

@@ -137,7 +137,8 @@ def check_fit(example: HiddenExample, params: dict) -> tuple[bool, str]:
 def run_hidden_case(name: str, *, calibrate: bool | None = None, candidates=None, seed: int = 3,
                     rig: dict | None = None):
     """The user's loop on the rig of :data:`HIDDEN_EXAMPLES` ``[name]``: compare the example's model (nuisances
-    calibrated when ``calibrate``; None: as the model says, off by default), attribute over ``candidates``
+    calibrated as ``calibrate`` says: True, False or "auto"; None: as the model says, default "auto",
+    :mod:`compare.escalation`), attribute over ``candidates``
     (default: every registered effect), add the best candidate with its fitted parameters (and, in calibrated
     runs, the nuisances it was fitted with, as ``gearpit compare --add`` does) and compare again. ``seed``: the
     rig's noise draw (the tests use the default; other seeds check that a result is not one draw's luck).
@@ -146,22 +147,23 @@ def run_hidden_case(name: str, *, calibrate: bool | None = None, candidates=None
 
     Returns ``(example, first comparison, attribution, second comparison)``.
     """
-    from compare.attribution import attribute
     from compare.calibration import calibrated_compare
     from compare.comparison import prepare_reference
+    from compare.escalation import compare_and_attribute
     from datagen.effects import EffectSpec
 
     m, ex = hidden_effect_measurement(name, seed=seed, **(rig or {}))
     ref = prepare_reference(m)
     model = ex.model()
-    c0 = calibrated_compare(m, model, reference=ref, calibrate_nuisances=calibrate)
-    a = attribute(ref, c0.model, c0.evaluation.residuals.residual_db, candidates=candidates,
-                  disagreements=c0.disagreements, calibration=c0.calibration)
+    staged = compare_and_attribute(m, model, reference=ref, calibrate=calibrate, candidates=candidates)
+    c0, a = staged.comparison, staged.attribution
     top = a.candidates[0]
     model1 = model.with_effect(EffectSpec.from_dict({"name": top.effect, **top.params}).build())
     if top.nuisance:
         model1 = model1.with_drivetrain(top.nuisance)
-    c1 = calibrated_compare(m, model1, reference=ref, calibrate_nuisances=calibrate)
+    # the same comparison as gearpit compare --add makes: calibrated again when calibration is on, at the
+    # nuisances the effect was fitted with otherwise (an escalated "auto" run)
+    c1 = calibrated_compare(m, model1, reference=ref, calibrate_nuisances=staged.mode is True)
     return ex, c0, a, c1
 
 

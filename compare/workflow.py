@@ -15,18 +15,19 @@ Used by ``gearpit compare`` and by ``experiments/compare_walkthrough.py``.
   added;
 - ``plugins`` are Python files with user effects; they are recorded in the model;
 - with ``calibrate=True`` (or the model's ``[calibration] enabled = true``) the drive-train nuisances are
-  calibrated to the measurement before the comparison (:mod:`compare.calibration`, off by default: its
-  docstring says why): the calibrated model is then the baseline the attribution measures every candidate
-  against.
+  calibrated to the measurement before the comparison (:mod:`compare.calibration`): the calibrated model is
+  then the baseline the attribution measures every candidate against; by default (``"auto"``) only when the
+  attribution against the model as written explains nothing (:mod:`compare.escalation`); then both passes go
+  into the ledger, the model as written first.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from compare.attribution import Attribution, AttributionSettings, attribute
-from compare.calibration import calibrated_compare
+from compare.attribution import Attribution, AttributionSettings
 from compare.comparison import Comparison, prepare_reference
+from compare.escalation import EXPLAINED_REDUCTION, compare_and_attribute
 from compare.ledger import append_row, last_candidate, ledger_path, make_row, read_ledger
 from compare.measurement import load_measurement
 from compare.model import ComparisonModel, parse_add
@@ -76,8 +77,8 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
         add: list[str] = (), plugins: list[str] = (), attribution: bool = True, candidates: list[str] | None = None,
         report: str | Path | None = None, json_path: str | Path | None = None, seed: int = 0,
         settings: AttributionSettings | None = None, parallel: bool = True, calibrate: bool | None = None) -> Outcome:
-    """The whole loop (module docstring); returns everything it computed. ``calibrate``: calibrate the
-    nuisances (None: as the model file says, default yes)."""
+    """The whole loop (module docstring); returns everything it computed. ``calibrate``: True, False or "auto"
+    (None: as the model file says, default "auto")."""
     messages: list[str] = []
     measurement = load_measurement(measurement_path, meta)
     mpath = Path(model_path) if model_path is not None else default_model_path(measurement_path)
@@ -99,19 +100,27 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
         model.save(mpath)
         messages.append(f"model written: {mpath}")
     ref = prepare_reference(measurement)
-    comparison = calibrated_compare(measurement, model, reference=ref, seed=seed, calibrate_nuisances=calibrate)
+    staged = compare_and_attribute(measurement, model, reference=ref, calibrate=calibrate, attribution=attribution,
+                                   candidates=candidates, settings=settings or AttributionSettings(seed=seed),
+                                   seed=seed, parallel=parallel)
+    comparison, att = staged.comparison, staged.attribution
+    if staged.escalated:
+        c0, a0 = staged.as_written
+        best = a0.candidates[0] if a0.candidates else None
+        messages.append(f"model as written: error {c0.error_db['total']:.2f} dB; no effect explains at least "
+                        f"{100 * EXPLAINED_REDUCTION:.0f} % of it (best: "
+                        + (f"{best.effect}, {100 * best.reduction:.1f} %" if best else "none")
+                        + "), so the drive-train nuisances were calibrated and the attribution repeated")
+        row = make_row(c0, a0, run=len(rows) + 1, measurement_path=str(measurement_path))
+        append_row(lpath, row)
+        rows = rows + [row]
     cal = comparison.calibration
     if cal is not None:
         messages.append("nuisances calibrated: " + ", ".join(f"{k} {v:.4g}" for k, v in cal.values.items())
                         + f" (error {cal.error_before_db:.2f} -> {cal.error_db:.2f} dB)")
-    att = None
-    if attribution:
-        att = attribute(ref, comparison.model, comparison.evaluation.residuals.residual_db, candidates=candidates,
-                        settings=settings or AttributionSettings(seed=seed), disagreements=comparison.disagreements,
-                        parallel=parallel, calibration=cal)
-        if att.claimed and att.rivals:
-            messages.append(f"claimed {att.claimed[0].effect}, but {', '.join(att.rivals)} lowers the error almost as "
-                            "much: these views cannot tell them apart")
+    if att is not None and att.claimed and att.rivals:
+        messages.append(f"claimed {att.claimed[0].effect}, but {', '.join(att.rivals)} lowers the error almost as "
+                        "much: these views cannot tell them apart")
     row = make_row(comparison, att, run=len(rows) + 1, measurement_path=str(measurement_path))
     append_row(lpath, row)
     rows = rows + [row]

@@ -1,7 +1,8 @@
 """The hidden-effect loop on a rig unlike the one the examples were chosen on: does the attribution generalise?
 
-Run: ``python experiments/generalisation_check.py [--calibrate] [--only NAME ...] [--seed N]`` (about 1-2 min per
-effect on 2 idle cores). The last line is JSON.
+Run: ``python experiments/generalisation_check.py [--calibrate | --no-calibrate] [--only NAME ...] [--seed N]``
+(about 1-4 min per effect on 2 idle cores; default calibration "auto", :mod:`compare.escalation`). The last line
+is JSON.
 
 The examples of :data:`compare.synthetic.HIDDEN_EXAMPLES` (and the slow tests) use one rig: the spur pair
 ``spur-gds`` at 1000 rpm, nuisances 15 % off the model's defaults, 30 dB noise, sensor gain x3.7. Here the
@@ -11,7 +12,8 @@ the defaults (mesh damping 0.03 against 0.07, bearing stiffness 3e8 against 1e8 
 against 0.05), 5 dB more noise, sensor gain x0.4, another noise seed. Nothing of the comparison was chosen on
 this rig. The loop is the user's (:func:`compare.synthetic.run_hidden_case`): compare, attribute over every
 registered effect, add the best with its fitted parameters, compare again; with ``--calibrate`` the drive-train
-nuisances are fitted first (:mod:`compare.calibration`).
+nuisances are fitted first (:mod:`compare.calibration`), by default only when the model as written explains
+nothing.
 
 Printed per effect: the error before and after (excess over the noise error, dB), the best candidate and its
 reduction, whether it was claimed, the fitted parameter against the truth (the examples' tolerances), and the
@@ -36,7 +38,7 @@ OTHER_RIG = {"pair": "helical-dct", "speed_rpm": 1500.0, "gain": 0.4,
 SNR_LESS_DB = 5.0
 
 
-def row(name: str, calibrate: bool, seed: int) -> dict:
+def row(name: str, calibrate, seed: int) -> dict:
     t0 = time.perf_counter()
     ex = HIDDEN_EXAMPLES[name]
     rig = {**OTHER_RIG, "snr_db": ex.snr_db - SNR_LESS_DB}
@@ -49,7 +51,9 @@ def row(name: str, calibrate: bool, seed: int) -> dict:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--calibrate", action="store_true", help="fit the drive-train nuisances first")
+    ap.add_argument("--calibrate", action=argparse.BooleanOptionalAction, default=None,
+                    help="calibrate the nuisances first (--no-calibrate: never; default \"auto\": only when the "
+                         "model as written explains nothing, compare.escalation)")
     ap.add_argument("--only", nargs="+", default=None, help="these hidden effects only")
     ap.add_argument("--seed", type=int, default=11, help="the rig's noise draw")
     args = ap.parse_args(argv)

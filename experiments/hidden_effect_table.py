@@ -1,7 +1,7 @@
 """The README's hidden-effect table: the user's loop on every example of compare.synthetic.HIDDEN_EXAMPLES.
 
-Run: ``python experiments/hidden_effect_table.py [--calibrate] [--only NAME ...] [--seed N]`` (about 1 min per effect on 2
-idle cores; the slow test suite checks the same runs: tests/test_compare_attribution.py).
+Run: ``python experiments/hidden_effect_table.py [--calibrate | --no-calibrate] [--only NAME ...] [--seed N]``
+(about 1 min per effect on 2 idle cores; the slow test suite checks the same runs: tests/test_compare_attribution.py).
 
 For each hidden effect: the rig ("measurement") has that effect and nuisances unlike the model's
 (compare.synthetic: damping, bearing stiffness, 30 dB noise, sensor gain x3.7, nominal speed 0.5 % off); the
@@ -26,7 +26,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from compare.synthetic import HIDDEN_EXAMPLES, case_checks, run_hidden_case, verdict  # noqa: E402
 
 
-def row(name: str, calibrate: bool, seed: int = 3) -> dict:
+def row(name: str, calibrate, seed: int = 3) -> dict:
     t0 = time.perf_counter()
     ex, c0, a, c1 = run_hidden_case(name, calibrate=calibrate, seed=seed)
     top = a.candidates[0]
@@ -38,7 +38,9 @@ def row(name: str, calibrate: bool, seed: int = 3) -> dict:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--calibrate", action="store_true", help="calibrate the nuisances first (compare.calibration)")
+    ap.add_argument("--calibrate", action=argparse.BooleanOptionalAction, default=None,
+                    help="calibrate the nuisances first (--no-calibrate: never; default \"auto\": only when the "
+                         "model as written explains nothing, compare.escalation)")
     ap.add_argument("--only", nargs="*", default=None, help="these hidden effects only")
     ap.add_argument("--seed", type=int, default=3, help="the rig's noise draw (the slow tests use 3)")
     args = ap.parse_args(argv)

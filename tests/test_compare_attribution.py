@@ -8,7 +8,9 @@ ranks first and is claimed; adding it with the fitted parameters cuts the total 
 checked parameter is within the tolerance of compare.synthetic.HIDDEN_EXAMPLES. Controls: no hidden effect ->
 nothing claimed; a disturbance outside the registry (rolling-bearing defect, mains hum) -> flagged unexplained,
 no gear effect claimed. The default (fast) tests use a reduced candidate list; the slow ones the whole registry.
-These run the comparison as it is by default (no nuisance calibration: compare.calibration says why).
+These run the comparison as it is by default ("auto": the model as written first; when no effect explains the
+mismatch, the nuisances are calibrated and the attribution repeated, compare.escalation; the controls explain
+nothing, so they check the calibrated pass too).
 
 Nuisance calibration (compare.calibration; source: the simulator's known truth): on a rig without hidden effect
 it recovers the nuisances within NUISANCE_TOLERANCE; with model and rig identical it stays at the truth and its
@@ -25,6 +27,7 @@ import pytest
 
 from compare.attribution import attribute
 from compare.calibration import calibrate, calibrated_compare
+from compare.escalation import compare_and_attribute
 from compare.comparison import compare, prepare_reference
 from compare.model import ComparisonModel
 from compare.synthetic import HIDDEN_EXAMPLES, NUISANCE, check_fit, rig_measurement, run_hidden_case
@@ -32,14 +35,13 @@ from compare.synthetic import HIDDEN_EXAMPLES, NUISANCE, check_fit, rig_measurem
 FAST_CANDIDATES = ["pitch_error", "eccentricity_pinion", "profile_error", "tip_relief"]
 
 
-def _attribute(m, candidates=None, model=None):
-    """The user's loop: calibrate the nuisances, compare the calibrated model, attribute."""
+def _attribute(m, candidates=None, model=None, calibrate=None):
+    """The user's loop as gearpit compare runs it by default: compare the model as written, attribute, and when
+    that explains nothing calibrate the nuisances and attribute again (compare.escalation, "auto")."""
     model = model or ComparisonModel()
     ref = prepare_reference(m)
-    c = calibrated_compare(m, model, reference=ref)
-    a = attribute(ref, c.model, c.evaluation.residuals.residual_db, candidates=candidates,
-                  disagreements=c.disagreements, calibration=c.calibration)
-    return ref, c, a
+    staged = compare_and_attribute(m, model, reference=ref, calibrate=calibrate, candidates=candidates)
+    return ref, staged.comparison, staged.attribution
 
 
 def bearing_defect(t):
@@ -59,6 +61,7 @@ def test_no_hidden_effect_claims_nothing():
     """Only nuisance differences: no candidate lowers the error by the claim threshold (30 %)."""
     _, c, a = _attribute(rig_measurement(duration_s=1.0), FAST_CANDIDATES)
     assert not a.claimed, [(x.effect, x.reduction) for x in a.candidates]
+    assert c.calibration is not None      # nothing explained as written: the calibrated pass is the one reported
 
 
 @pytest.mark.parametrize("disturbance", [bearing_defect, mains_hum])
@@ -67,6 +70,7 @@ def test_disturbance_outside_the_registry_is_unexplained(disturbance):
     effect is claimed for them."""
     _, c, a = _attribute(rig_measurement(duration_s=1.0, extra=disturbance), FAST_CANDIDATES)
     assert not a.claimed, [(x.effect, x.reduction) for x in a.candidates]
+    assert c.calibration is not None
     texts = [u["text"] for u in a.unexplained]
     assert any("not a shaft order" in t or "band" in t for t in texts), texts
 
@@ -139,6 +143,7 @@ def test_controls_with_the_whole_registry(disturbance):
     """The controls above with every registered effect as a candidate (2 s records)."""
     _, c, a = _attribute(rig_measurement(extra=disturbance))
     assert not a.claimed, [(x.effect, x.reduction) for x in a.candidates]
+    assert c.calibration is not None
     if disturbance is not None:
         assert a.unexplained
 

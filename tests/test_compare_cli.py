@@ -82,6 +82,35 @@ def test_no_calibrate_keeps_the_model_drive_train(rig, capsys, tmp_path):
     assert rows[-1]["calibration"] is None
 
 
+def test_auto_calibrates_only_when_the_model_as_written_explains_nothing(rig, capsys, tmp_path):
+    """Default calibration mode "auto" (compare.escalation). On the pitch-error rig the model as written explains
+    the mismatch (pitch_error claimed, >= 50 % of the error): no calibration, one ledger row. On a rig without
+    hidden effect nothing explains it: the drive train is calibrated and the attribution repeated; the ledger has
+    the uncalibrated row, then the calibrated one, and the JSON is the calibrated pass's."""
+    from compare.escalation import EXPLAINED_REDUCTION
+    from compare.workflow import write_rig_files
+
+    cands = "pitch_error,eccentricity_wheel"
+    assert main(["compare", str(rig / "rig.csv"), "--model", str(tmp_path / "a.toml"), "--candidates", cands,
+                 "--json", str(tmp_path / "a.json")]) == 0
+    out = capsys.readouterr().out
+    assert "nuisances calibrated" not in out and "<- claimed" in out
+    doc = json.loads((tmp_path / "a.json").read_text())
+    top = doc["attribution"]["candidates"][0]
+    assert top["effect"] == "pitch_error" and top["claimed"] and top["reduction"] >= EXPLAINED_REDUCTION
+    assert doc["calibration"] is None and len(read_ledger(tmp_path / "a.ledger.jsonl")) == 1
+
+    csv = write_rig_files(rig_measurement(duration_s=1.0), tmp_path / "healthy")
+    assert main(["compare", str(csv), "--model", str(tmp_path / "b.toml"), "--candidates", cands,
+                 "--json", str(tmp_path / "b.json")]) == 0
+    out = capsys.readouterr().out
+    assert "nuisances were calibrated and the attribution repeated" in out and "nuisances calibrated:" in out
+    rows = read_ledger(tmp_path / "b.ledger.jsonl")
+    assert [r["calibration"] is None for r in rows] == [True, False]
+    doc = json.loads((tmp_path / "b.json").read_text())
+    assert doc["calibration"] is not None and not doc["attribution"]["claimed"]
+
+
 def test_bad_file_gives_one_line_and_exit_2(tmp_path, capsys):
     """A NaN in the sensor column: exit code 2 and one stderr line naming the channel and the NaN."""
     x = np.sin(np.arange(20000) * 0.3)
@@ -155,6 +184,17 @@ def test_model_toml_round_trip_and_refusals(tmp_path):
     (tmp_path / "bad2.toml").write_text('[[effects]]\nname = "tip_relief"\namount_m = 1.0\n')
     with pytest.raises(InputError, match="amount_m"):
         ComparisonModel.load(tmp_path / "bad2.toml")
+    # the calibration mode: true, false or "auto" (the default), anything else refused naming the field
+    assert ComparisonModel().calibration_mode == "auto" and not ComparisonModel().calibrates
+    (tmp_path / "auto.toml").write_text('[calibration]\nenabled = "auto"\n')
+    assert ComparisonModel.load(tmp_path / "auto.toml").calibration_mode == "auto"
+    (tmp_path / "bad3.toml").write_text('[calibration]\nenabled = "sometimes"\n')
+    with pytest.raises(InputError, match="model.calibration.enabled"):
+        ComparisonModel.load(tmp_path / "bad3.toml")
+    from compare.escalation import resolve_mode
+
+    with pytest.raises(InputError, match="calibrate"):
+        resolve_mode(ComparisonModel(), "yes")
 
 
 @pytest.mark.slow

@@ -19,7 +19,8 @@ def register(sub) -> None:
     p.add_argument("--no-attribution", action="store_true", help="only compare; do not fit missing effects")
     p.add_argument("--calibrate", action=argparse.BooleanOptionalAction, default=None,
                    help="fit the mesh damping, bearing stiffness and bearing damping to the measurement before "
-                        "the attribution (default: as the model's [calibration] enabled says, else off)")
+                        "the attribution; --no-calibrate: never (default: as the model's [calibration] enabled "
+                        "says, else \"auto\": only when no effect explains the mismatch of the model as written)")
     p.add_argument("--report", type=Path, help="write a self-contained HTML report")
     p.add_argument("--json", type=Path, help="write the JSON document (schema gearpit.compare/2)")
     p.add_argument("--seed", type=int, default=0, help="seed of the noise matched to the measured floor")

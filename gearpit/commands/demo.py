@@ -8,8 +8,9 @@ Stages (each writes into its own folder under ``--out``):
 4. ``features``: the feature table (incl. HHT) of the demo dataset and the ranking of every feature.
 5. ``models``: the CNN trained on a small dataset of the demo sweep's classes and evaluated on held-out records.
 6. ``compare``: one full model-vs-measurement loop on a "measurement" simulated with a hidden pitch error and
-   nuisance physics unlike the model's: calibrate the model's drive-train nuisances, compare, rank the candidate
-   effects, add the claimed one, compare again.
+   nuisance physics unlike the model's: compare, rank the candidate effects (calibrating the model's drive-train
+   nuisances only if no effect explains the mismatch as written: compare.escalation), add the claimed one,
+   compare again.
 
 Later stages are appended to :data:`STAGES` as the pipeline grows.
 """
