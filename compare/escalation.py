@@ -76,6 +76,17 @@ class Staged:
     def escalated(self) -> bool:
         return self.as_written is not None
 
+    def summary(self) -> dict:
+        """The JSON document's ``escalation`` entry (:data:`compare.schema.SCHEMA`)."""
+        out = {"mode": self.mode, "escalated": self.escalated, "explained_reduction": EXPLAINED_REDUCTION}
+        if self.escalated:
+            c0, a0 = self.as_written
+            best = a0.candidates[0] if a0.candidates else None
+            out["as_written_error_db"] = float(c0.error_db["total"])
+            out["as_written_best"] = ({"effect": best.effect, "reduction": float(best.reduction),
+                                       "claimed": bool(best.claimed)} if best is not None else None)
+        return out
+
 
 def explains(attribution) -> bool:
     """Whether ``attribution`` claims an effect that lowers the excess error by :data:`EXPLAINED_REDUCTION`."""

@@ -32,8 +32,9 @@ def _num(v):
 
 
 def document(comparison, attribution=None, ledger_rows=(), *, measurement_path: str | None = None,
-             model_path: str | None = None) -> dict:
-    """The JSON document of a comparison (schema: :data:`compare.schema.SCHEMA`)."""
+             model_path: str | None = None, escalation: dict | None = None) -> dict:
+    """The JSON document of a comparison (schema: :data:`compare.schema.SCHEMA`); ``escalation``: how the
+    calibration mode played out (:meth:`compare.escalation.Staged.summary`)."""
     ref, ev = comparison.reference, comparison.evaluation
     m = ref.measurement
     plan = ref.plan
@@ -67,6 +68,8 @@ def document(comparison, attribution=None, ledger_rows=(), *, measurement_path: 
         "attribution": attribution.to_dict() if attribution is not None else None,
         "ledger": list(ledger_rows),
     }
+    if escalation is not None:
+        doc["escalation"] = escalation
     return json.loads(json.dumps(doc, default=_default))
 
 
@@ -111,8 +114,16 @@ def _fmt(v, nd=3):
     return str(v)
 
 
-def _calibration_html(cal: dict | None) -> list[str]:
-    """The nuisance-calibration section (compare.calibration)."""
+def _calibration_html(cal: dict | None, escalation: dict | None = None) -> list[str]:
+    """The nuisance-calibration section (compare.calibration; why it ran: compare.escalation)."""
+    why = []
+    if escalation and escalation.get("escalated"):
+        best = escalation.get("as_written_best")
+        why = [f"<p>Calibrated because the model as written (error {escalation['as_written_error_db']:.2f} dB) left "
+               f"the mismatch unexplained: no claimed effect lowered its error by "
+               f"{100 * escalation['explained_reduction']:.0f} % (best: "
+               + (f"{html.escape(best['effect'])}, {100 * best['reduction']:.1f} %" if best else "none")
+               + "). Its row is in the ledger below.</p>"]
     if cal is None:
         return ["<p>Nuisance calibration: off (the drive train as the model file gives it).</p>"]
     rows = [[k, _fmt(cal["start"].get(k), 4), _fmt(v, 4), _fmt(cal["sigma"].get(k), 2)]
@@ -124,7 +135,7 @@ def _calibration_html(cal: dict | None) -> list[str]:
             _table(["parameter", "model file / default", "calibrated", "1 sigma ('-': not identifiable)"], rows),
             f"<p>Raw total error (before the noise correction) {cal['error_before_db']:.3f} dB before, "
             f"{cal['error_db']:.3f} dB after "
-            f"({cal['n_simulations']} simulations, {cal['elapsed_s']:.1f} s).</p>"]
+            f"({cal['n_simulations']} simulations, {cal['elapsed_s']:.1f} s).</p>", *why]
 
 
 def write_html(comparison, doc: dict, path: str | Path) -> Path:
@@ -141,7 +152,7 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
              f"(nominal {m['speed_rpm_nominal']:g}, refined from the {m['speed_method']}), torque {m['torque_nm']:g} N m.</p>",
              f"<p>Model: <code>{html.escape(doc['model']['description'])}</code>. Sensor gain fitted: "
              f"{doc['gain_db']:+.2f} dB.</p>",
-             *_calibration_html(doc.get("calibration")),
+             *_calibration_html(doc.get("calibration"), doc.get("escalation")),
              "<h2>Error</h2>",
              _table(["view", "error (dB)", "raw error E (dB)", "noise error N (dB)"],
                     [[k, f"{v:.3f}", f"{doc['raw_error_db'].get(k, float('nan')):.3f}",

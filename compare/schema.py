@@ -119,6 +119,22 @@ SCHEMA = {
                                           "reduction: these views cannot tell them apart"},
                 "elapsed_s": {"type": "number"}, "n_simulations": {"type": "integer"},
                 "group_seconds": {"type": "object"}}},
+        "escalation": {
+            "type": "object",
+            "description": "how the calibration mode played out (compare.escalation); absent from documents "
+                           "written before the \"auto\" mode",
+            "required": ["mode", "escalated"],
+            "properties": {"mode": {"enum": [True, False, "auto"]},
+                           "escalated": {"type": "boolean",
+                                         "description": "the model as written explained nothing, so the nuisances "
+                                                        "were calibrated and the attribution repeated"},
+                           "explained_reduction": {"type": "number",
+                                                   "description": "what 'explains' means: a claimed effect lowering "
+                                                                  "the error by at least this fraction"},
+                           "as_written_error_db": _NUM,
+                           "as_written_best": {"type": ["object", "null"],
+                                               "description": "the first pass's best candidate: effect, reduction, "
+                                                              "claimed"}}},
         "ledger": {"type": "array",
                    "items": {"type": "object", "required": ["run", "model", "error_db"],
                              "properties": {"run": {"type": "integer"}, "model": {"type": "string"},

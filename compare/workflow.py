@@ -124,7 +124,8 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
     row = make_row(comparison, att, run=len(rows) + 1, measurement_path=str(measurement_path))
     append_row(lpath, row)
     rows = rows + [row]
-    doc = document(comparison, att, rows, measurement_path=str(measurement_path), model_path=str(mpath))
+    doc = document(comparison, att, rows, measurement_path=str(measurement_path), model_path=str(mpath),
+                   escalation=staged.summary())
     if json_path is not None:
         write_json(doc, json_path)
         messages.append(f"JSON written: {json_path}")

@@ -99,6 +99,7 @@ def test_auto_calibrates_only_when_the_model_as_written_explains_nothing(rig, ca
     top = doc["attribution"]["candidates"][0]
     assert top["effect"] == "pitch_error" and top["claimed"] and top["reduction"] >= EXPLAINED_REDUCTION
     assert doc["calibration"] is None and len(read_ledger(tmp_path / "a.ledger.jsonl")) == 1
+    assert doc["escalation"] == {"mode": "auto", "escalated": False, "explained_reduction": EXPLAINED_REDUCTION}
 
     csv = write_rig_files(rig_measurement(duration_s=1.0), tmp_path / "healthy")
     assert main(["compare", str(csv), "--model", str(tmp_path / "b.toml"), "--candidates", cands,
@@ -109,6 +110,17 @@ def test_auto_calibrates_only_when_the_model_as_written_explains_nothing(rig, ca
     assert [r["calibration"] is None for r in rows] == [True, False]
     doc = json.loads((tmp_path / "b.json").read_text())
     assert doc["calibration"] is not None and not doc["attribution"]["claimed"]
+    esc = doc["escalation"]
+    assert esc["mode"] == "auto" and esc["escalated"]
+    assert esc["as_written_error_db"] == pytest.approx(rows[0]["error_db"]["total"])
+    assert esc["as_written_best"]["reduction"] < EXPLAINED_REDUCTION or not esc["as_written_best"]["claimed"]
+    jsonschema = pytest.importorskip("jsonschema")
+    from compare.schema import SCHEMA
+
+    jsonschema.validate(doc, SCHEMA)
+    assert main(["compare", str(csv), "--model", str(tmp_path / "b.toml"), "--candidates", cands,
+                 "--report", str(tmp_path / "b.html")]) == 0
+    assert "Calibrated because the model as written" in (tmp_path / "b.html").read_text()
 
 
 def test_bad_file_gives_one_line_and_exit_2(tmp_path, capsys):
