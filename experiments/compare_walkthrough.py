@@ -6,9 +6,10 @@
    effect the model lacks, rig damping and bearing stiffness unlike the model's defaults, sensor noise (SNR
    30 dB) and an unknown sensor gain (x3.7); writes it as DIR/rig.csv (time, sensor, tacho) with its sidecar
    DIR/rig.toml - from here on it is treated exactly like a file from a rig;
-2. ``gearpit compare DIR/rig.csv`` (baseline model - with ``--calibrate`` its drive-train nuisances first
-   calibrated to the measurement - attribution over every registered effect): error per view, largest
-   disagreements, ranked candidate effects with fitted parameters;
+2. ``gearpit compare DIR/rig.csv`` (baseline model, attribution over every registered effect; its drive-train
+   nuisances calibrated to the measurement first with ``--calibrate``, by default only when the model as written
+   explains nothing, compare.escalation): error per view, largest disagreements, ranked candidate effects with
+   fitted parameters;
 3. ``gearpit compare DIR/rig.csv --add <claimed effect>`` (parameters from the ledger): the error falls;
 4. prints the ledger. Reports: DIR/report_1.html, DIR/report_2.html (+ .json). Last line: JSON summary.
 (:func:`compare.workflow.hidden_effect_loop` does steps 1-3; ``gearpit demo`` can call it too.)
