@@ -6,7 +6,7 @@ is JSON.
 
 The examples of :data:`compare.synthetic.HIDDEN_EXAMPLES` (and the slow tests) use one rig: the spur pair
 ``spur-gds`` at 1000 rpm, nuisances 15 % off the model's defaults, 30 dB noise, sensor gain x3.7. Here the
-same hidden effects, at the same parameter values and loads, sit on another rig (:data:`OTHER_RIG`): the helical
+same hidden effects, at the same parameter values and loads, sit on another rig (:data:`compare.synthetic.OTHER_RIGS`): the helical
 pair ``helical-dct`` (17/60 teeth, 29 deg helix, other module and material), 1500 rpm, nuisances 2-3 times off
 the defaults (mesh damping 0.03 against 0.07, bearing stiffness 3e8 against 1e8 N/m, bearing damping 0.03
 against 0.05), 5 dB more noise, sensor gain x0.4, another noise seed. Nothing of the comparison was chosen on
@@ -30,17 +30,11 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from compare.synthetic import HIDDEN_EXAMPLES, case_checks, run_hidden_case, verdict  # noqa: E402
+from compare.synthetic import HIDDEN_EXAMPLES, OTHER_RIGS, case_checks, run_hidden_case, verdict  # noqa: E402
 
-#: the other rig (keyword arguments of compare.synthetic.rig_measurement); noise: the example's SNR less this
-OTHER_RIG = {"pair": "helical-dct", "speed_rpm": 1500.0, "gain": 0.4,
-             "nuisance": {"mesh_damping_ratio": 0.03, "bearing_n_per_m": 3.0e8, "bearing_damping_ratio": 0.03}}
-SNR_LESS_DB = 5.0
-#: a third rig, checked after the "auto" calibration was chosen on the two above: the spur pair again, at another
-#: speed, with the drive train off the other way (softer bearings, more damping), another gain and noise draw
-SOFT_RIG = {"pair": "spur-gds", "speed_rpm": 1400.0, "gain": 12.0,
-            "nuisance": {"mesh_damping_ratio": 0.1, "bearing_n_per_m": 4.0e7, "bearing_damping_ratio": 0.1}}
-RIGS = {"helical": (OTHER_RIG, SNR_LESS_DB), "soft": (SOFT_RIG, 3.0)}
+#: the other rigs (compare.synthetic.OTHER_RIGS: keyword arguments of rig_measurement, and how many dB less SNR)
+RIGS = OTHER_RIGS
+OTHER_RIG, SNR_LESS_DB = OTHER_RIGS["helical"]
 
 
 def row(name: str, calibrate, seed: int, rig_name: str = "helical") -> dict:
