@@ -145,7 +145,7 @@ def check_fit(example: HiddenExample, params: dict) -> tuple[bool, str]:
     return ratio <= tol, f"{name}: fitted {fit:.4g}, true {true:.4g}, ratio {ratio:.3g} <= {tol}"
 
 
-def run_hidden_case(name: str, *, calibrate: bool | None = None, candidates=None, seed: int = 3,
+def run_hidden_case(name: str, *, calibrate: bool | str | None = None, candidates=None, seed: int = 3,
                     rig: dict | None = None):
     """The user's loop on the rig of :data:`HIDDEN_EXAMPLES` ``[name]``: compare the example's model (nuisances
     calibrated as ``calibrate`` says: True, False or "auto"; None: as the model says, default "auto",

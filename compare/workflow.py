@@ -76,7 +76,8 @@ def extend_model(model: ComparisonModel, add: list[str], rows: list[dict], messa
 def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_path: str | Path | None = None,
         add: list[str] = (), plugins: list[str] = (), attribution: bool = True, candidates: list[str] | None = None,
         report: str | Path | None = None, json_path: str | Path | None = None, seed: int = 0,
-        settings: AttributionSettings | None = None, parallel: bool = True, calibrate: bool | None = None) -> Outcome:
+        settings: AttributionSettings | None = None, parallel: bool = True,
+        calibrate: bool | str | None = None) -> Outcome:
     """The whole loop (module docstring); returns everything it computed. ``calibrate``: True, False or "auto"
     (None: as the model file says, default "auto")."""
     messages: list[str] = []
@@ -104,14 +105,14 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
                                    candidates=candidates, settings=settings or AttributionSettings(seed=seed),
                                    seed=seed, parallel=parallel)
     comparison, att = staged.comparison, staged.attribution
+    escalation = staged.summary()
     if staged.escalated:
-        c0, a0 = staged.as_written
-        best = a0.candidates[0] if a0.candidates else None
-        messages.append(f"model as written: error {c0.error_db['total']:.2f} dB; no effect explains at least "
-                        f"{100 * EXPLAINED_REDUCTION:.0f} % of it (best: "
-                        + (f"{best.effect}, {100 * best.reduction:.1f} %" if best else "none")
+        best = escalation["as_written_best"]
+        messages.append(f"model as written: error {escalation['as_written_error_db']:.2f} dB; no claimed effect "
+                        f"explains {100 * EXPLAINED_REDUCTION:.0f} % of it (best: "
+                        + (f"{best['effect']}, {100 * best['reduction']:.1f} %" if best else "none")
                         + "), so the drive-train nuisances were calibrated and the attribution repeated")
-        row = make_row(c0, a0, run=len(rows) + 1, measurement_path=str(measurement_path))
+        row = make_row(*staged.as_written, run=len(rows) + 1, measurement_path=str(measurement_path))
         append_row(lpath, row)
         rows = rows + [row]
     cal = comparison.calibration
@@ -125,7 +126,7 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
     append_row(lpath, row)
     rows = rows + [row]
     doc = document(comparison, att, rows, measurement_path=str(measurement_path), model_path=str(mpath),
-                   escalation=staged.summary())
+                   escalation=escalation)
     if json_path is not None:
         write_json(doc, json_path)
         messages.append(f"JSON written: {json_path}")
@@ -159,7 +160,7 @@ def write_rig_files(measurement, out: str | Path, *, stem: str = "rig") -> Path:
 
 
 def hidden_effect_loop(out: str | Path, hidden: str = "pitch_error", *, seed: int = 0,
-                       calibrate: bool | None = None) -> tuple[dict, Outcome, Outcome]:
+                       calibrate: bool | str | None = None) -> tuple[dict, Outcome, Outcome]:
     """The README's full loop on a simulated rig with a hidden effect (:mod:`compare.synthetic`).
 
     Writes ``out/rig.csv`` + ``rig.toml``, compares the baseline model (nuisances calibrated with
