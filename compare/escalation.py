@@ -103,7 +103,9 @@ def resolve_mode(model, calibrate) -> object:
 def compare_and_attribute(measurement, model, *, reference=None, calibrate=None, attribution: bool = True,
                           candidates=None, settings=None, seed: int = 0, parallel: bool = True) -> Staged:
     """Compare ``model`` with ``measurement`` and attribute the mismatch, calibrating as ``calibrate`` says
-    (module docstring); ``calibrate`` None: as the model says."""
+    (module docstring); ``calibrate`` None: as the model says. Without ``attribution`` there is nothing to
+    escalate on, so "auto" compares once with the drive train the model holds (after ``gearpit compare --add``:
+    the nuisances the added effect was fitted with)."""
     from compare.attribution import AttributionSettings, attribute
     from compare.calibration import calibrated_compare
     from compare.comparison import prepare_reference
