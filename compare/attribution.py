@@ -264,9 +264,10 @@ def _period_s(ref: Reference, model, effect) -> float:
 def transient_groups(names_: list) -> list[list]:
     """The time-stepped candidates ``names_`` split into the groups fitted in parallel processes: the effects
     with a nonlinear mesh law (contact loss: backlash) apart from the others. A time-stepped batch integrates
-    all its cases together, so every case waits for the slowest: measured on the benchmark's 2 s record,
-    backlash alone took 31.6 s (12 simulations), the speed and torque fluctuations together 24.8 s (90), and
-    the three in one group 53.6 s."""
+    all its cases together, so every case waits for the slowest: measured on the benchmark's 2 s record
+    (the rig without a hidden effect, one process on an idle core), backlash alone takes 15.9 s (12
+    simulations), the speed and torque fluctuations together 15.7 s (82), and the three in one group 27.9 s
+    (27.6, 18.5 and 43.6 s before the per-step work of the time stepping was trimmed)."""
     from datagen.effects import get
 
     contact = [n for n in names_ if "mesh_force_batch" in get(n).hooks()]

@@ -145,21 +145,41 @@ class MeshRecords:
         pad = [np.pad(r.e_slots, ((0, 0), (0, n_slots - r.e_slots.shape[1]))) for r in records]
         self.e_slots = np.concatenate(pad)
         self.has_error = any(r.has_error for r in records)
+        # for the per-step lookup (:meth:`_index`): the period as a float, the last index, the wrap-around step
+        self._n_float = self.n.astype(float)
+        self._last = self.n - 1
+        self._zeros = np.zeros(len(records))
+        self._zeros.flags.writeable = False
 
     def _index(self, x_cycles):
-        p = np.mod(x_cycles * self.ppc, self.n)
-        i0 = np.floor(p).astype(np.int64)
+        p = np.mod(x_cycles * self.ppc, self._n_float)     # in [0, n): truncation is the floor
+        i0 = p.astype(np.int64)
         f = p - i0
-        i0 = np.minimum(i0, self.n - 1)
-        i1 = np.where(i0 + 1 == self.n, 0, i0 + 1)
-        return i0 + self.offset, i1 + self.offset, f
+        i0 = np.minimum(i0, self._last)
+        i1 = i0 + 1
+        i1[i1 == self.n] = 0
+        i0 += self.offset
+        i1 += self.offset
+        return i0, i1, f
 
     def at(self, x_cycles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Stiffness and error force per case at positions ``x_cycles`` (shape (..., C))."""
+        """Stiffness and error force per case at positions ``x_cycles`` (shape (..., C)); the error force of a
+        batch without errors is a shared read-only zero array."""
         a, b, f = self._index(x_cycles)
-        k = self.k[a] * (1 - f) + self.k[b] * f
-        e = self.error_force[a] * (1 - f) + self.error_force[b] * f if self.has_error else np.zeros_like(k)
-        return k, e
+        g = 1 - f
+        k = self.k[a] * g + self.k[b] * f
+        if not self.has_error:
+            return k, (self._zeros if k.shape == self._zeros.shape else np.zeros_like(k))
+        return k, self.error_force[a] * g + self.error_force[b] * f
+
+    def all_at(self, x_cycles: np.ndarray) -> tuple:
+        """:meth:`at` and :meth:`slots_at` at positions ``x_cycles`` (C,), sharing one interpolation index."""
+        a, b, f = self._index(x_cycles)
+        g = 1 - f
+        k = self.k[a] * g + self.k[b] * f
+        e = self.error_force[a] * g + self.error_force[b] * f if self.has_error else np.zeros_like(k)
+        f, g = f[:, None], g[:, None]
+        return k, e, self.k_slots[a] * g + self.k_slots[b] * f, self.e_slots[a] * g + self.e_slots[b] * f
 
     def slots_at(self, x_cycles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Per-pair stiffness and deviation (C, S) at positions ``x_cycles`` (C,)."""

@@ -41,7 +41,7 @@ def transient_response(cases, R: int, n_discard: int) -> list[Response]:
     n_total = n_discard + (n_out - 1) * R + D + 1
     records = MeshRecords([c.record for c in cases])
     c_m = mesh_damping(cases)
-    z1 = np.array([c.model.pair.pinion.teeth for c in cases], dtype=float)
+    z1_per_rad = np.array([c.model.pair.pinion.teeth for c in cases], dtype=float) / (2 * np.pi)  # mesh cycles/rad
     ratio2 = np.array([c.model.ratio[c.model.index("phi_2")] for c in cases])
     i_phi1 = cases[0].model.index("phi_1")
     i_phim, i_phib = cases[0].model.index("phi_m"), cases[0].model.index("phi_b")
@@ -95,21 +95,23 @@ def transient_response(cases, R: int, n_discard: int) -> list[Response]:
     def mesh_force(i: int, S: np.ndarray, delta_lin: np.ndarray, h: np.ndarray):
         j = i % CHUNK
         phi_pred = S[:, i_phi1] + dt * S[:, n + i_phi1] + 0.5 * dt * dt * S[:, 2 * n + i_phi1]
-        x = z1 * (theta_steps["theta"][j] + phi_pred) / (2 * np.pi)
-        k, E = records.at(x)
+        x = z1_per_rad * (theta_steps["theta"][j] + phi_pred)
         if not nonlinear:
+            k, E = records.at(x)
             kappa = k + (2.0 / dt) * c_m
             t1 = c_m * h + E
             delta = (delta_lin + sig * t1) / (1.0 + sig * kappa)
             return delta, kappa * delta - t1, 0
-        ks, es = records.slots_at(x)
-        mesh = MeshState(k, c_m, E, ks, es)
+        k, E, ks, es = records.all_at(x)
+        # each law's cases, cut once per step (not per Newton iteration)
+        parts = [(cls.mesh_force_batch, idx, params, MeshState(k[idx], c_m[idx], E[idx], ks[idx], es[idx]))
+                 for cls, idx, params in nonlinear]
 
         def law(delta, delta_dot):
             F = k * delta + c_m * delta_dot - E
             dF, dFd = k.copy(), c_m.copy()
-            for cls, idx, params in nonlinear:
-                F[idx], dF[idx], dFd[idx] = cls.mesh_force_batch(params, delta[idx], delta_dot[idx], mesh.subset(idx))
+            for force_batch, idx, params, mesh in parts:
+                F[idx], dF[idx], dFd[idx] = force_batch(params, delta[idx], delta_dot[idx], mesh)
             return F, dF, dFd
 
         return newmark.solve_mesh_law(delta_lin, h, sig, dt, law)
@@ -133,12 +135,12 @@ def transient_response(cases, R: int, n_discard: int) -> list[Response]:
     first = n_discard - D
     for i0, traj, force, bad in newmark.run_general(batch, S0, n_total, CHUNK, inputs, mesh_force):
         bad_total += bad
-        L = traj.shape[2]
+        L = traj.shape[0]
         steps = i0 + 1 + np.arange(L)                     # step index of each sample
         sel = steps >= first
         if not np.any(sel):
             continue
-        fine = channel_values(traj[:, :, sel], force[:, sel], theta_steps["omega"][sel].T, co)   # (C, Q, l)
+        fine = channel_values(traj[sel].transpose(1, 2, 0), force[sel].T, theta_steps["omega"][sel].T, co)  # (C, Q, l)
         kept.append(dec.push(fine.reshape(-1, fine.shape[2]).T))
         out_rows = (steps - n_discard) % R == 0
         out_rows &= steps >= n_discard

@@ -292,3 +292,40 @@ def test_pitted_tooth_shows_once_per_revolution():
     assert sideband_fraction(p.channels["acc_pinion_loa_m_s2"]) > 1e-3
     assert h.metadata["solver"]["period_cycles"] == 1
     assert p.metadata["solver"]["distinct_cycles"] >= 2
+
+
+def test_newton_mesh_law_matches_a_bracketing_root_finder():
+    """``newmark.solve_mesh_law`` (Newton, vectorised over cases; its last F moved along the tangent instead of
+    evaluated again) against scipy's brentq per case (reference: an independent bracketing solver), for a
+    dead-zone law with kinks (backlash's elastic force; its damping here acts in and out of contact, since with
+    damping switched off in the clearance the law jumps at the flank and a case can have no root at all) and a
+    smooth stiffening one. Tolerance: delta to 1e-10 relative, and the returned F equal to the law evaluated at
+    the returned delta to 1e-9 relative."""
+    from scipy.optimize import brentq
+
+    rng = np.random.default_rng(5)
+    C, dt, sigma = 64, 1e-5, 2e-9 * (1 + rng.random(64))
+    k, c, b = 3e8 * (1 + rng.random(C)), 500.0 * rng.random(C), 40e-6 * rng.random(C)
+    h = 1e-2 * rng.standard_normal(C)
+
+    def dead_zone(d, dd):
+        front, back = d > 0, d < -b
+        touch = (front | back).astype(float)
+        return k * (np.where(front, d, 0.0) + np.where(back, d + b, 0.0)) + c * dd, k * touch, c
+
+    def stiffening(d, dd):
+        return k * d * (1 + (d / 20e-6) ** 2) + c * dd, k * (1 + 3 * (d / 20e-6) ** 2), c
+
+    for law in (dead_zone, stiffening):
+        delta_lin = 60e-6 * rng.standard_normal(C)
+        delta, F, bad = newmark.solve_mesh_law(delta_lin, h, sigma, dt, law)
+        assert bad == 0
+        for j in range(C):
+            def g(x, j=j):
+                one = np.zeros(C)
+                one[j] = x
+                return x + sigma[j] * law(one, (2.0 / dt) * one - h)[0][j] - delta_lin[j]
+            ref = brentq(g, -1e-3, 1e-3, xtol=1e-16, rtol=1e-14)
+            assert delta[j] == pytest.approx(ref, rel=1e-10, abs=1e-16)
+        F_at = law(delta, (2.0 / dt) * delta - h)[0]
+        np.testing.assert_allclose(F, F_at, rtol=1e-9, atol=1e-9 * np.abs(F_at).max())

@@ -43,8 +43,8 @@ class Backlash(Effect):
         ks = mesh.k_slots_n_per_m
         front = d > 0
         back = d < -b
-        elastic = np.sum(ks * (np.where(front, d, 0.0) + np.where(back, d + b, 0.0)), axis=1)
-        k_touch = np.sum(ks * (front | back), axis=1)
-        frac = k_touch / np.maximum(np.sum(ks, axis=1), 1e-30)
+        elastic = (ks * (np.where(front, d, 0.0) + np.where(back, d + b, 0.0))).sum(axis=1)
+        k_touch = (ks * (front | back)).sum(axis=1)
+        frac = k_touch / np.maximum(ks.sum(axis=1), 1e-30)
         c = mesh.c_n_s_per_m * frac
         return elastic + c * delta_dot_m_s, k_touch, c
