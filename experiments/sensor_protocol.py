@@ -240,6 +240,10 @@ def run_encoders(data_dir: Path, jobs: int, variants: tuple[str, ...] | None = N
 BEARINGS = {"bearing_n_per_m": [3e7, 3e8]}   # moves the 2.2 kHz bearing-mesh mode to 1.3-3.6 kHz
 SECOND = ((EXTRA_SEED_OFFSET, "second_draw", None),)
 BEARING_DRAWS = ((2 * EXTRA_SEED_OFFSET, "bearings", BEARINGS), (3 * EXTRA_SEED_OFFSET, "bearings2", BEARINGS))
+#: tsa_lp_load's side inputs and the pitted-teeth profile (models/tooth_profile.py)
+PROFILE = NO_SPEED + ("tooth_profile",)
+
+
 def _lp_load(c: float, **more) -> dict:
     """TrainConfig overrides of tsa_lp_load with the low-pass at ``c`` mesh orders (and ``more`` fields)."""
     return {"representation": _tsa_lowpass(c), "operating_inputs": NO_SPEED, **more}
@@ -274,6 +278,12 @@ ABLATIONS = {
     "tsa_lp_load_in_domain_seed1": ("in_domain", _lp_load(1.25, seed=1), True, SECOND),
     "tsa_lp_load_in_domain_seed2": ("in_domain", _lp_load(1.25, seed=2), True, SECOND),
     "tsa_lp2_nospeed": ("speed", _lp_load(2.0), True, SECOND),
+    # tsa_lp_load with the pitted-teeth profile (models/tooth_profile.py) as further side inputs
+    "tsa_lp_profile": ("speed", _lp_load(1.25, operating_inputs=PROFILE), True, SECOND),
+    "tsa_lp_profile_seed1": ("speed", _lp_load(1.25, operating_inputs=PROFILE, seed=1), True, SECOND),
+    "tsa_lp_profile_seed2": ("speed", _lp_load(1.25, operating_inputs=PROFILE, seed=2), True, SECOND),
+    "tsa_lp_profile_load": ("load", _lp_load(1.25, operating_inputs=PROFILE), True, SECOND),
+    "tsa_lp_profile_in_domain": ("in_domain", _lp_load(1.25, operating_inputs=PROFILE), True, SECOND),
     "path": ("speed", {"augment": AugmentConfig(path_probability=0.5)}, True, SECOND),
     "lowpass": ("speed", {"augment": AugmentConfig(lowpass_probability=0.5)}, True, SECOND),
     "bearings": ("speed", {}, True, BEARING_DRAWS[:1]),
@@ -313,6 +323,47 @@ def run_ablation(name: str, data_dir: Path, channel: str = "dte_m", variant: str
     res["confusion"] = {"severity": metrics["severity_class"], "teeth": metrics.get("teeth")}
     log(f"ablation {name}: severity {res['accuracy']:.3f}, teeth {res['teeth_accuracy']:.3f}")
     return res
+
+
+def profile_baseline(data_dir: Path, channel: str = "dte_m") -> dict:
+    """The pitted-teeth count from the 12 values of :mod:`models.tooth_profile` alone: a standardised logistic
+    regression (no tuning) on each split's training records (the default's training part and the second draw's,
+    as for the CNNs), scored on the same test records, and in-domain also on them through eccentric encoders."""
+    from sklearn.linear_model import LogisticRegression
+    from sklearn.pipeline import make_pipeline
+    from sklearn.preprocessing import StandardScaler
+
+    from models.tooth_profile import FEATURE_NAMES, tooth_profile
+
+    def profile(d: SignalSet) -> np.ndarray:
+        return tooth_profile(d.signals, fs_hz=d.fs_hz, shaft_hz=d.shaft_hz(), z_pinion=int(d.pair.z_pinion),
+                             z_wheel=int(d.pair.z_wheel))
+
+    data = dataset("default", data_dir, channel=channel)
+    more = second_draw(data_dir, channel)
+    fx, fm = profile(data), profile(more)
+    y, ym = data.teeth_classes().astype(str), more.teeth_classes().astype(str)
+    out = {"channel": channel, "features": list(FEATURE_NAMES), "model": "standardised logistic regression, C = 1",
+           "splits": {}}
+    for split in ("in_domain", "speed", "load"):
+        tr, te, rule = splits(data, inner=True)[split]
+        trm = draw_training_rows(split, more)
+        clf = make_pipeline(StandardScaler(), LogisticRegression(max_iter=5000))
+        clf.fit(np.vstack([fx[tr], fm[trm]]), np.concatenate([y[tr], ym[trm]]))
+        pred = clf.predict(fx[te])
+        res = {"rule": rule, "n_train": int(len(tr) + len(trm)), "n_test": int(len(te)),
+               "teeth_accuracy": float(np.mean(pred == y[te])),
+               "by_speed_rpm": {f"{lo:g}-{lo + 200:g}": float(np.mean((pred == y[te])[sel]))
+                                for lo in range(600, 1800, 200)
+                                if (sel := (data.labels["speed_rpm"].to_numpy()[te] >= lo)
+                                    & (data.labels["speed_rpm"].to_numpy()[te] < lo + 200)).any()}}
+        if split == "in_domain" and channel == "dte_m":
+            enc = second_draw(data_dir, channel, seed_offset=0, tag="encoders", effects=ENCODERS).subset(te)
+            res["teeth_accuracy_encoders"] = float(np.mean(clf.predict(profile(enc)) == y[te]))
+        out["splits"][split] = res
+        log(f"profile baseline {split}: teeth {res['teeth_accuracy']:.3f}"
+            + (f", with encoder errors {res['teeth_accuracy_encoders']:.3f}" if "teeth_accuracy_encoders" in res else ""))
+    return out
 
 
 def tables(results: list[dict]) -> str:
@@ -376,11 +427,13 @@ def main(argv=None) -> int:
     ap.add_argument("--encoders", action="store_true",
                     help="cross-physics on the transmission error: tested with encoder eccentricity")
     ap.add_argument("--tables", action="store_true", help="write the RESULTS.md table from the stored runs")
+    ap.add_argument("--profile-baseline", action="store_true",
+                    help="the pitted-teeth count from models/tooth_profile.py alone (logistic regression), all splits")
     ap.add_argument("--ablation", choices=tuple(ABLATIONS),
                     help="one ablation run, on --channel (default: the transmission error)")
     args = ap.parse_args(argv)
-    if args.channel is None and not args.tables and args.ablation is None and not args.encoders:
-        ap.error("give --channel, --ablation, --encoders or --tables")
+    if args.channel is None and not (args.tables or args.ablation or args.encoders or args.profile_baseline):
+        ap.error("give --channel, --ablation, --encoders, --profile-baseline or --tables")
     import torch
 
     torch.set_num_threads(1)
@@ -398,6 +451,10 @@ def main(argv=None) -> int:
         res = run_ablation(args.ablation, args.data_dir, channel=args.channel or "dte_m")
         (WHERE / "ablations").mkdir(exist_ok=True)
         (WHERE / "ablations" / f"{res['channel']}_{args.ablation}.json").write_text(json.dumps(res, indent=1))
+    if args.profile_baseline:
+        res = profile_baseline(args.data_dir, channel=args.channel or "dte_m")
+        (WHERE / f"profile_baseline_{res['channel']}.json").write_text(json.dumps(res, indent=1))
+        print(json.dumps({k: v["teeth_accuracy"] for k, v in res["splits"].items()}))
     if args.tables:
         results = [json.loads((WHERE / f"{c}.json").read_text()) for c in CHANNELS if (WHERE / f"{c}.json").is_file()]
         text = tables(results)

@@ -168,7 +168,7 @@ def check_input(spec: ModelSpec, data: SignalSet, *, allow_mismatch: bool = Fals
         check_inputs(spec.representation_spec(), data.n_samples, data.fs_hz, data.shaft_hz(), data.mesh_cps(),
                      z_pinion=data.pair.z_pinion or None, z_wheel=data.pair.z_wheel or None)
         for col in spec.operating_inputs.get("columns", ()):
-            need = "speed_rpm" if col in ("signal_rms_hp", "signal_rms_no1x") else col
+            need = "speed_rpm" if col in ("signal_rms_hp", "signal_rms_no1x", "tooth_profile") else col
             require(col == "signal_rms" or need in data.labels, "labels", list(data.labels.columns),
                     f"a {need} column (the model takes the operating point as a side input)")
     else:
