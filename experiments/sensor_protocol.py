@@ -64,7 +64,7 @@ from models.train import TrainConfig, stratified_split, train_cnn  # noqa: E402
 
 CHANNELS = {"acc_pinion_loa_m_s2": "housing accelerometer (pinion, line of action)",
             "dte_m": "transmission error (two shaft encoders)"}
-VARIANTS = ("tsa_op", "tsa_level", "tsa_lp_load", "tsa_te")
+VARIANTS = ("tsa_op", "tsa_level", "tsa_lp_load", "tsa_te", "tsa_lp_profile")
 def _tsa_lowpass(c: float) -> RepresentationSpec:
     """The TSA of tsa_level low-passed below ``c`` mesh orders (models/representations.py)."""
     return replace(VARIANTS_ALL["tsa_level"][0], lowpass_mesh_orders=c)
@@ -77,9 +77,13 @@ NO_SPEED = ("torque_nm", "signal_rms")
 #: first order removed from the record first and from its RMS (``signal_rms_no1x``), so that the encoders'
 #: once-per-revolution errors reach neither input (a high-pass at 2.5 orders did that too, but also took the low
 #: orders of the pit's dip: ablations te_hp_*; why: RESULTS.md, sensor section)
+#: ``tsa_lp_profile``: as ``tsa_lp_load``, with the pitted-teeth profile (models/tooth_profile.py: how many tooth
+#: pitches the TSA's deviation covers, after both shafts' first order is removed) as 12 more side inputs
+PROFILE = NO_SPEED + ("tooth_profile",)
 SENSOR_VARIANTS = {"tsa_op": VARIANTS_ALL["tsa_op"], "tsa_level": VARIANTS_ALL["tsa_level"],
                    "tsa_lp_load": (_tsa_lowpass(1.25), NO_SPEED),
-                   "tsa_te": (replace(_tsa_lowpass(1.25), remove_shaft_1x=True), ("torque_nm", "signal_rms_no1x"))}
+                   "tsa_te": (replace(_tsa_lowpass(1.25), remove_shaft_1x=True), ("torque_nm", "signal_rms_no1x")),
+                   "tsa_lp_profile": (_tsa_lowpass(1.25), PROFILE)}
 #: the variants each channel runs (the low-passed one is a transmission-error model: on the accelerometer the
 #: pit's quasi-static dip is not what the sensor sees)
 CHANNEL_VARIANTS = {"acc_pinion_loa_m_s2": ("tsa_op", "tsa_level"), "dte_m": VARIANTS}
@@ -240,10 +244,6 @@ def run_encoders(data_dir: Path, jobs: int, variants: tuple[str, ...] | None = N
 BEARINGS = {"bearing_n_per_m": [3e7, 3e8]}   # moves the 2.2 kHz bearing-mesh mode to 1.3-3.6 kHz
 SECOND = ((EXTRA_SEED_OFFSET, "second_draw", None),)
 BEARING_DRAWS = ((2 * EXTRA_SEED_OFFSET, "bearings", BEARINGS), (3 * EXTRA_SEED_OFFSET, "bearings2", BEARINGS))
-#: tsa_lp_load's side inputs and the pitted-teeth profile (models/tooth_profile.py)
-PROFILE = NO_SPEED + ("tooth_profile",)
-
-
 def _lp_load(c: float, **more) -> dict:
     """TrainConfig overrides of tsa_lp_load with the low-pass at ``c`` mesh orders (and ``more`` fields)."""
     return {"representation": _tsa_lowpass(c), "operating_inputs": NO_SPEED, **more}

@@ -36,8 +36,9 @@ cost severity accuracy (experiments/RESULTS.md, section "Sensor").
 ``tooth_profile`` is a group of 12 values taken as they are (not ``log10``): how many tooth pitches the
 deviation of the pinion's synchronous average covers (:mod:`models.tooth_profile`). It counts pitted teeth
 independently of the record's scale, sign and speed: on the transmission error's speed split a logistic
-regression on these 12 values alone counts the teeth of the records above 1200 rpm at 91.8 % (the CNN
-without them 77-85 %; experiments/RESULTS.md, section "Sensor").
+regression on these 12 values alone counts the teeth of the records above 1200 rpm at 91.6 % (the CNN
+without them 77-85 %; experiments/RESULTS.md, section "Sensor"). A transmission-error quantity: on the
+housing accelerometer the same regression is at chance.
 
 The standardisation is fitted once on the training records and stored in the
 model (:attr:`models.spec.ModelSpec.operating_inputs`): ``{"columns": [...],

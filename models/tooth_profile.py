@@ -13,9 +13,12 @@ does not depend on
 - the speed (the average is in the angle domain, the low-pass in mesh orders),
 - where the pitted teeth sit (everything is circular and aligned on the largest bump).
 
-A CNN trained below 1200 rpm counted the ringing after each pit (a bearing mode whose lobes grow with the
-speed) as further teeth above it (experiments/RESULTS.md, section "Sensor"); the pitch-wide smoothing and the
-normalised spans are what this module adds against that.
+A CNN trained on the transmission error below 1200 rpm over-counts pitted teeth above that speed
+(experiments/RESULTS.md, section "Sensor"); these values are read the same way at every speed, and given to
+it as side inputs they lift its cross-speed teeth accuracy above the 85 % target (same section).
+
+On a housing accelerometer the low orders hold little of the pit (acceleration of a quasi-static deviation,
+through a housing path): a logistic regression on these values counts teeth at chance there (25-28 %).
 
 Features (:data:`FEATURE_NAMES`, :data:`N_FEATURES` = 12), with ``s`` the difference signal smoothed over one
 pitch (circular moving average), ``m`` its median and ``A = max(s) - m``:
