@@ -196,6 +196,21 @@ def test_remove_shaft_1x_takes_out_both_shafts_lines_and_keeps_their_neighbours(
         represent((lines + keep)[None, :], spec, fs_hz=fs, shaft_hz=fr, z_pinion=13)
 
 
+@pytest.mark.parametrize("n", [12800, 12799, 40])
+def test_remove_shaft_lines_is_the_least_squares_fit_of_numpy(n):
+    """models.order_filters.remove_shaft_lines (normal equations on regressors built from block phasors) equals the
+    residual of numpy's lstsq on cos/sin columns built sample by sample, to 1e-12 of the record's scale."""
+    from models.order_filters import remove_shaft_lines
+
+    rng = np.random.default_rng(n)
+    fs, freqs = 12800.0, (16.7, 4.85)
+    t = np.arange(n) / fs
+    x = rng.standard_normal(n) + 3.0 * np.sin(2 * np.pi * 16.7 * t + 0.4) + 2.0 * np.cos(2 * np.pi * 4.85 * t)
+    a = np.column_stack([np.ones(n)] + [g(2 * np.pi * f * t) for f in freqs for g in (np.cos, np.sin)])
+    coef, *_ = np.linalg.lstsq(a, x, rcond=None)
+    np.testing.assert_allclose(remove_shaft_lines(x, fs, freqs), x - a @ coef, atol=1e-12 * np.abs(x).max())
+
+
 def test_signal_rms_no1x_is_the_level_without_the_two_shaft_lines():
     """signal_rms_no1x of (pinion order 1 x10 + wheel order 1 x30 + order 7 x1) on a 13/29 pair is the order-7
     tone's RMS 1/sqrt(2) within 1e-3 (least-squares removal; see the test above for the small non-orthogonality);
