@@ -410,8 +410,28 @@ def tables(results: list[dict]) -> str:
             rows.append(f"| {a['ablation']} ({a['variant']}) | {a['channel']} | {a['split']} | {a['n_train']} | "
                         f"{100 * a['accuracy']:.1f} | {100 * a['teeth_accuracy']:.1f} | {a['train_seconds']:.0f} | "
                         f"{enc_txt} |")
+    prof = sorted(WHERE.glob("profile_baseline_*.json"))
+    if prof:
+        rows += ["", "Pitted-teeth profile alone (`--profile-baseline`: standardised logistic regression on the 12 "
+                 "values of `models/tooth_profile.py`, the CNNs' training and test records; teeth accuracy %):", "",
+                 "| channel | in-domain | with encoder errors | speed | load |", "|---|---|---|---|---|"]
+        for path in prof:
+            b = json.loads(path.read_text())
+            sp_ = b["splits"]
+            enc = sp_["in_domain"].get("teeth_accuracy_encoders")
+            rows.append(f"| {b['channel']} | {100 * sp_['in_domain']['teeth_accuracy']:.1f} | "
+                        f"{'-' if enc is None else f'{100 * enc:.1f}'} | {100 * sp_['speed']['teeth_accuracy']:.1f} | "
+                        f"{100 * sp_['load']['teeth_accuracy']:.1f} |")
+    met_abl = []
+    for path in abl:
+        a = json.loads(path.read_text())
+        target = TARGETS.get(a["split"])
+        if target is not None and min(a["accuracy"], a["teeth_accuracy"]) >= target:
+            met_abl.append(f"{a['ablation']} ({a['channel']} / {a['split']})")
     rows += ["", f"Targets (in-domain {TARGETS['in_domain']:.0%}, cross-condition {TARGETS['speed']:.0%}, both "
              "tasks) met by: " + "; ".join(met) + "."]
+    if met_abl:
+        rows.append(f"One-run ablations that meet their split's target on both tasks: {', '.join(met_abl)}.")
     return "\n".join(rows) + "\n"
 
 
@@ -438,7 +458,7 @@ def main(argv=None) -> int:
 
     torch.set_num_threads(1)
     WHERE.mkdir(parents=True, exist_ok=True)
-    if args.channel and not args.ablation and not args.encoders:
+    if args.channel and not (args.ablation or args.encoders or args.profile_baseline):
         t0 = time.perf_counter()
         res = run_channel(args.channel, args.data_dir, args.jobs, tuple(args.variant) if args.variant else None,
                           tuple(args.split) if args.split else None)
