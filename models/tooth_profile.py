@@ -49,8 +49,9 @@ from models.representations import RepresentationSpec, represent
 #: chosen there on an inner speed split (experiments/sensor_protocol.py); not re-chosen here
 LOWPASS_MESH_ORDERS = 1.25
 #: the TSA the profile is read from (the classifiers' ``tsa`` representation, low-passed), with both shafts' first
-#: order removed from the record first: shaft-encoder disc eccentricity puts a line of tens of um there (against a
-#: pit's ~1 um), whose wheel line leaks into the pinion's low orders (default dataset, eccentric encoders: teeth
+#: order removed from the record first: shaft-encoder disc eccentricity puts lines of 3-28 um there (10-60 arcsec,
+#: against a loaded transmission error of a few um), and the wheel's leaks into the pinion's low orders (default
+#: dataset, eccentric encoders: teeth
 #: 68.5 % without the removal, 95.3 % with it, the same 95.3 % on exact encoders; experiments/RESULTS.md)
 PROFILE_SPEC = RepresentationSpec(kind="tsa", n_revs=8, samples_per_rev=1024, lowpass_mesh_orders=LOWPASS_MESH_ORDERS,
                                   remove_shaft_1x=True)
