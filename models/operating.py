@@ -59,6 +59,8 @@ OPERATING_COLUMNS: tuple[str, ...] = ("speed_rpm", "torque_nm", "signal_rms", "s
                                       "tooth_profile")
 #: side inputs that are a group of values taken as they are (not log10): name -> number of values
 GROUPS = {"tooth_profile": N_FEATURES}
+#: side inputs computed from the record that need its speed (the ``speed_rpm`` label)
+NEEDS_SPEED = ("signal_rms_hp", "signal_rms_no1x", "tooth_profile")
 #: cut-off of ``signal_rms_hp`` (pinion shaft orders): above the wheel's and the pinion's first order, below
 #: the lowest pinion order a tooth fault spreads to that matters (the difference signal starts at 3)
 HIGHPASS_ORDERS = 2.5
@@ -103,7 +105,7 @@ def _column(data, c: str) -> np.ndarray:
     return labels[c].to_numpy(dtype=float)
 
 
-def _log_values(data, cols: tuple[str, ...]) -> np.ndarray:
+def _values(data, cols: tuple[str, ...]) -> np.ndarray:
     """``log10`` of each scalar side input, the values of each group (:data:`GROUPS`) as they are."""
     parts = []
     for c in cols:
@@ -124,7 +126,7 @@ def fit_operating(data, columns) -> dict:
     cols = check_columns(columns)
     if not cols:
         return {}
-    v = _log_values(data, cols)
+    v = _values(data, cols)
     sd = v.std(axis=0)
     return {"columns": list(cols), "mean": [float(m) for m in v.mean(axis=0)],
             "std": [float(s) if s > 0 else 1.0 for s in sd]}
@@ -145,7 +147,7 @@ def operating_features(data, stats: dict) -> np.ndarray:
     if not stats:
         return np.zeros((len(data), 0), dtype=np.float32)
     cols = check_columns(stats["columns"])
-    v = _log_values(data, cols)
+    v = _values(data, cols)
     return ((v - np.asarray(stats["mean"])) / np.asarray(stats["std"])).astype(np.float32)
 
 

@@ -21,6 +21,7 @@ import pandas as pd
 
 from gearpit.errors import InputError, require
 from models.data import PairInfo, SignalSet
+from models.operating import NEEDS_SPEED
 from models.representations import FS_BOUND, RepresentationSpec, check_inputs
 
 FORMAT = "gearpit-model"
@@ -168,7 +169,7 @@ def check_input(spec: ModelSpec, data: SignalSet, *, allow_mismatch: bool = Fals
         check_inputs(spec.representation_spec(), data.n_samples, data.fs_hz, data.shaft_hz(), data.mesh_cps(),
                      z_pinion=data.pair.z_pinion or None, z_wheel=data.pair.z_wheel or None)
         for col in spec.operating_inputs.get("columns", ()):
-            need = "speed_rpm" if col in ("signal_rms_hp", "signal_rms_no1x", "tooth_profile") else col
+            need = "speed_rpm" if col in NEEDS_SPEED else col
             require(col == "signal_rms" or need in data.labels, "labels", list(data.labels.columns),
                     f"a {need} column (the model takes the operating point as a side input)")
     else:
