@@ -9,6 +9,7 @@ records of their batch.
 """
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -39,22 +40,28 @@ def crop_starts(n_crops: int) -> tuple[float, ...]:
     return (0.5,) if n_crops == 1 else tuple(float(v) for v in np.linspace(0.0, 1.0, n_crops))
 
 
-def representation_batches(data: SignalSet, spec: ModelSpec, *, crops: tuple[float, ...], batch_size: int = 256):
-    """Yield ``(slice, tensor, side)`` for batches of ``batch_size`` records of ``data``: the tensor holds
-    the representation of each record at each start of ``crops``, ``(records * len(crops), channels,
-    length)``, record by record (the crops of a record adjacent); ``side`` the side inputs
-    (:mod:`models.operating`) repeated for every crop, or None."""
+def represent_batch(data: SignalSet, spec: ModelSpec, sl: slice, crops: tuple[float, ...]):
+    """``(tensor, side)`` of the records ``sl`` of ``data``: the tensor holds the representation of each record
+    at each start of ``crops``, ``(records * len(crops), channels, length)``, record by record (the crops of a
+    record adjacent); ``side`` the side inputs (:mod:`models.operating`) repeated for every crop, or None.
+    Every value depends on its own record only, so batches can be computed in any order or in parallel."""
     rep = spec.representation_spec()
-    fr, mc = data.shaft_hz(), data.mesh_cps()
-    side = operating_features(data, spec.operating_inputs) if spec.operating_inputs else None
-    k = len(crops)
+    part = data.subset(np.arange(sl.start, sl.stop))
+    fr, mc = part.shaft_hz(), part.mesh_cps()
+    x = represent_crops(part.signals, rep, fs_hz=part.fs_hz, crops=crops, shaft_hz=fr, mesh_cps=mc,
+                        z_pinion=part.pair.z_pinion or None, z_wheel=part.pair.z_wheel or None)
+    x = torch.from_numpy(x.reshape(-1, *x.shape[2:]))
+    if not spec.operating_inputs:
+        return x, None
+    return x, torch.from_numpy(np.repeat(operating_features(part, spec.operating_inputs), len(crops), axis=0))
+
+
+def representation_batches(data: SignalSet, spec: ModelSpec, *, crops: tuple[float, ...], batch_size: int = 256):
+    """Yield ``(slice, tensor, side)`` for batches of ``batch_size`` records of ``data``
+    (:func:`represent_batch`)."""
     for i0 in range(0, len(data), batch_size):
         sl = slice(i0, min(i0 + batch_size, len(data)))
-        x = represent_crops(data.signals[sl], rep, fs_hz=data.fs_hz, crops=crops,
-                            shaft_hz=None if fr is None else fr[sl], mesh_cps=None if mc is None else mc[sl],
-                            z_pinion=data.pair.z_pinion or None, z_wheel=data.pair.z_wheel or None)
-        x = torch.from_numpy(x.reshape(-1, *x.shape[2:]))
-        yield sl, x, None if side is None else torch.from_numpy(np.repeat(side[sl], k, axis=0))
+        yield (sl, *represent_batch(data, spec, sl, crops))
 
 
 @dataclass
@@ -70,25 +77,40 @@ class CNNClassifier:
 
         ``batch_size``: segments per network pass (records x crops; the crops of a record are represented
         together and go through the network in the same pass; a larger pass was measured slower, its
-        activations falling out of the cache); ``threads``: torch CPU threads (1 or 2).
+        activations falling out of the cache); ``threads``: worker threads (1 or 2), each representing and
+        classifying its own batches with one torch thread. The predictions do not depend on ``threads``: every
+        batch is computed the same way whichever worker takes it (tested).
         """
         starts = crop_starts(n_crops)
         require(threads in (1, 2), "threads", threads, "1 or 2")
-        torch.set_num_threads(threads)
         warnings = check_input(self.spec, data, allow_mismatch=allow_mismatch)
         n, k = len(data), len(starts)
         p_sev = np.zeros((n, len(self.spec.severity_classes)))
         p_teeth = np.zeros((n, len(self.spec.teeth_classes)))
         sev = np.zeros(n)
         self.network.eval()
-        with torch.inference_mode():
-            for sl, x, side in representation_batches(data, self.spec, crops=starts,
-                                                      batch_size=max(1, batch_size // k)):
+        per = max(1, batch_size // k)
+
+        def run(sl: slice) -> None:
+            torch.set_num_threads(1)       # per thread: OpenMP's thread count is a per-thread setting
+            x, side = represent_batch(data, self.spec, sl, starts)
+            with torch.inference_mode():
                 out = self.network(x, side)
-                b = sl.stop - sl.start
-                p_sev[sl] = torch.softmax(out["severity_class"], dim=1).numpy().reshape(b, k, -1).sum(axis=1)
-                p_teeth[sl] = torch.softmax(out["teeth"], dim=1).numpy().reshape(b, k, -1).sum(axis=1)
-                sev[sl] = out["severity"].numpy().reshape(b, k).sum(axis=1)
+            b = sl.stop - sl.start
+            p_sev[sl] = torch.softmax(out["severity_class"], dim=1).numpy().reshape(b, k, -1).sum(axis=1)
+            p_teeth[sl] = torch.softmax(out["teeth"], dim=1).numpy().reshape(b, k, -1).sum(axis=1)
+            sev[sl] = out["severity"].numpy().reshape(b, k).sum(axis=1)
+
+        slices = [slice(i0, min(i0 + per, n)) for i0 in range(0, n, per)]
+        # one torch thread per worker: the workers share nothing but the read-only network, so no OpenMP
+        # barrier waits (train.py: two OpenMP threads on a loaded machine were measured 25x slower than one)
+        torch.set_num_threads(1)
+        if threads == 1 or len(slices) == 1:
+            for sl in slices:
+                run(sl)
+        else:
+            with ThreadPoolExecutor(threads) as pool:
+                list(pool.map(run, slices))
         severity = np.clip(sev / k * self.spec.severity_scale, 0.0, None)
         return Predictions(list(self.spec.severity_classes), list(self.spec.teeth_classes), p_sev / k,
                            p_teeth / k, severity, warnings)

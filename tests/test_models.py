@@ -303,6 +303,25 @@ def test_save_load_gives_identical_predictions(trained, separable, tmp_path):
     assert loaded.spec == trained.spec
 
 
+def test_predictions_do_not_depend_on_the_worker_threads_or_the_batch(separable):
+    """predict with two worker threads gives bitwise the predictions of one thread at the same batch size (several
+    batches per worker; side inputs, the pitted-teeth profile among them, computed per batch), and those of one
+    big batch within float32 rounding (the network's matrix kernels block by batch size): every value depends
+    on its own record only."""
+    train, test = separable
+    rep = RepresentationSpec(kind="tsa", n_revs=4, samples_per_rev=128, lowpass_mesh_orders=1.25)
+    model = train_cnn(train, _fast_config(representation=rep, max_epochs=2,
+                                          operating_inputs=("torque_nm", "signal_rms", "tooth_profile")))
+    one = model.predict(test, threads=1, batch_size=9)             # 3 records per batch at 3 crops
+    two = model.predict(test, threads=2, batch_size=9)
+    whole = model.predict(test, threads=1, batch_size=256)
+    for field in ("severity_proba", "teeth_proba", "severity"):
+        np.testing.assert_array_equal(getattr(one, field), getattr(two, field))
+        np.testing.assert_allclose(getattr(one, field), getattr(whole, field), rtol=1e-5, atol=1e-7)
+    with pytest.raises(InputError, match="threads"):
+        model.predict(test, threads=3)
+
+
 def test_transmission_error_model_round_trips_its_filters_and_side_inputs(separable, tmp_path):
     """A tsa_te-like CNN (TSA high-passed at 2.5 orders, low-passed below 1.25 mesh orders; side inputs torque and
     signal_rms_hp) saves and reloads with the same spec (filters and side-input statistics included) and

@@ -9,6 +9,7 @@ per speed and load), ``predictions.csv``, ``confusion.png`` and ``breakdown.png`
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 
 from gearpit.errors import require
@@ -23,17 +24,19 @@ def register(sub) -> None:
     p.add_argument("--channel", default=None, help="dataset channel (default: the model's training channel)")
     p.add_argument("--pair", default=None, help="gear pair of the dataset to use (if it holds several)")
     p.add_argument("--crops", type=int, default=3, help="test-time segments per record (CNN, default 3)")
+    p.add_argument("--threads", type=int, default=min(2, os.cpu_count() or 1), choices=(1, 2),
+                   help="worker threads of the CNN (default: 2 where there are two cores; same predictions)")
     p.add_argument("--allow-mismatch", action="store_true",
                    help="warn instead of refusing a different sampling rate or gear pair where possible")
     p.set_defaults(func=run)
 
 
-def predict_any(model, data, *, crops: int, allow_mismatch: bool):
-    """Predictions of a CNN or a feature baseline."""
+def predict_any(model, data, *, crops: int, allow_mismatch: bool, threads: int = 1):
+    """Predictions of a CNN (``threads`` worker threads) or a feature baseline."""
     from models.classifier import CNNClassifier
 
     if isinstance(model, CNNClassifier):
-        return model.predict(data, n_crops=crops, allow_mismatch=allow_mismatch)
+        return model.predict(data, n_crops=crops, allow_mismatch=allow_mismatch, threads=threads)
     return model.predict(data, allow_mismatch=allow_mismatch)
 
 
@@ -57,7 +60,7 @@ def run(args) -> int:
     model = load_model(args.model)
     data = load_data(args.data, channel=resolve_channel(model, args.data, args.channel), pair=args.pair)
     require(data.has_labels(), "DATA", data.source, "labelled records (a severity_class label at least)")
-    pred = predict_any(model, data, crops=args.crops, allow_mismatch=args.allow_mismatch)
+    pred = predict_any(model, data, crops=args.crops, allow_mismatch=args.allow_mismatch, threads=args.threads)
     metrics = evaluate(data, pred)
     metrics["model"] = str(args.model)
     out = args.out if args.out is not None else args.model / "eval"

@@ -11,6 +11,7 @@ sampling rate, gear pair or a record too short is refused otherwise.
 from __future__ import annotations
 
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -25,6 +26,8 @@ def register(sub) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object per record instead of a table")
     p.add_argument("--channel", default=None, help="dataset channel (default: the model's training channel)")
     p.add_argument("--crops", type=int, default=3, help="test-time segments per record (CNN, default 3)")
+    p.add_argument("--threads", type=int, default=min(2, os.cpu_count() or 1), choices=(1, 2),
+                   help="worker threads of the CNN (default: 2 where there are two cores; same predictions)")
     p.add_argument("--allow-mismatch", action="store_true",
                    help="warn instead of refusing a different sampling rate or gear pair where possible")
     p.set_defaults(func=run)
@@ -39,7 +42,7 @@ def run(args) -> int:
     require(args.crops >= 1, "--crops", args.crops, "an integer >= 1")
     model = load_model(args.model)
     data = load_data(args.files, channel=resolve_channel(model, args.files, args.channel))
-    pred = predict_any(model, data, crops=args.crops, allow_mismatch=args.allow_mismatch)
+    pred = predict_any(model, data, crops=args.crops, allow_mismatch=args.allow_mismatch, threads=args.threads)
     table = pred.to_frame()
     names = data.labels["file"] if "file" in data.labels else data.labels.get("sample_index", table.index)
     table.insert(0, "record", [str(v) for v in names])
