@@ -170,7 +170,8 @@ def analyse(x: np.ndarray, fs_hz: float, track: AngleTrack, plan: Plan, *, keep_
                 v = ind[shaft][key]
                 v = v if np.isfinite(v) else 0.0
                 levels[i] = db(abs(v) ** 2 if INDICATORS[key][0] == 20 else abs(v))
-            levels[i] = max(levels[i], -60.0)
+            if not loc.gain:             # dimensionless indicators near 0; the RMS is a level and moves with the gain
+                levels[i] = max(levels[i], -60.0)
     curves = {}
     if keep_curves:
         curves = {"order_hz": np.arange(pp.size) * bin_hz, "order_power": pp, "order_floor": fl_p,

@@ -62,11 +62,14 @@ def test_identical_signals_give_zero_error(base):
     assert ev.total_db < 1e-9
 
 
-def test_unknown_gain_is_fitted_not_assumed(base):
-    """A model 7.3x too small: gain fitted to 20 log10(7.3) = 17.27 dB (to 0.01 dB), error still 0 (to 1e-6)."""
+@pytest.mark.parametrize("factor", [7.3, 1e6, 1e-3])
+def test_unknown_gain_is_fitted_not_assumed(base, factor):
+    """A model ``factor`` times too small: gain fitted to 20 log10(factor) (to 0.01 dB), error still 0 (to 1e-6).
+    1e6: a model channel in metres against a measurement in micrometres (a transmission error from encoders): no
+    level may be floored at an absolute value (the record RMS once was, at -60 dB)."""
     x, ref = base
-    ev = evaluate(ref, x / 7.3, FS)
-    assert ev.residuals.gain_db == pytest.approx(20 * np.log10(7.3), abs=0.01)
+    ev = evaluate(ref, x / factor, FS)
+    assert ev.residuals.gain_db == pytest.approx(20 * np.log10(factor), abs=0.01)
     assert ev.total_db < 1e-6
 
 
