@@ -13,7 +13,11 @@
 - ``disagreements`` the largest disagreements, ranked, in physical terms
 - ``fitspace``      an effect's declared fit parameters as search coordinates; starting points
 - ``search``        the batched search rounds and the quadratic surrogate
-- ``attribution``   fit every missing registered effect, rank by error reduction, flag the unexplained
+- ``fitting``       one group of candidate effects fitted in batched rounds; each one's best fit and 1-sigma
+- ``candidates``    a fitted candidate, the attribution's result, and the claim and rival rules
+- ``attribution``   fit every missing registered effect, rank by error reduction, claim, flag the unexplained
+- ``channels``      further measured channels (encoders' transmission error, ...) settle rivals the sensor cannot
+- ``escalation``    the "auto" calibration mode: as written first, calibrated when nothing explains the mismatch
 - ``ledger``        append-only history of comparisons next to the model
 - ``report``        the JSON document and the self-contained HTML report (schema in ``schema``)
 - ``plots``         figures (matplotlib, Agg) - the only module that draws

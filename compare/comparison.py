@@ -167,20 +167,26 @@ def noise_error(y0: np.ndarray, fs_hz: float, track, plan: Plan, s2: float, firs
 
 
 def simulate_model(ref: Reference, model, *, extra_effects_list=((),), seed: int = 0, duration_s: float | None = None,
-                   solver: dict | None = None) -> list:
-    """Simulate ``model`` (plus each entry of ``extra_effects_list``) at the reference operating point, one batch."""
+                   solver: dict | None = None, channels: tuple | None = None, models=None) -> list:
+    """Simulate ``model`` (plus each entry of ``extra_effects_list``; or each of ``models``) at the reference
+    operating point, one batch: the sensor channel of each, or with ``channels`` a dict of those channels."""
     from datagen.simulate import simulate
 
     m = ref.measurement
     dur = ref.model_duration_s() if duration_s is None else duration_s
-    cases = [model.case(m.pair, speed_rpm=ref.speed.speed_rpm, torque_nm=m.torque_nm, duration_s=dur,
-                        fs_hz=m.fs_hz, seed=seed, extra_effects=tuple(extra), solver=solver)
-             for extra in extra_effects_list]
+    op = {"speed_rpm": ref.speed.speed_rpm, "torque_nm": m.torque_nm, "duration_s": dur, "fs_hz": m.fs_hz, "seed": seed,
+          "solver": solver}
+    cases = ([mod.case(m.pair, **op) for mod in models] if models is not None else
+             [model.case(m.pair, extra_effects=tuple(extra), **op) for extra in extra_effects_list])
     signals = simulate(cases)
+    wanted = (model.sensor,) if channels is None else tuple(channels)
     for s in signals:
-        require(model.sensor in s.channels, "model.sensor", model.sensor,
-                "a simulated channel: " + ", ".join(sorted(k for k in s.channels if not k.startswith("_"))))
-    return [s.channels[model.sensor] for s in signals]
+        for ch in wanted:
+            require(ch in s.channels, "model.sensor" if channels is None else "secondary channel", ch,
+                    "a simulated channel: " + ", ".join(sorted(k for k in s.channels if not k.startswith("_"))))
+    if channels is None:
+        return [s.channels[model.sensor] for s in signals]
+    return [{ch: s.channels[ch] for ch in wanted} for s in signals]
 
 
 @dataclass(frozen=True, eq=False)

@@ -88,6 +88,20 @@ class Staged:
         return out
 
 
+def settle_rivals(ref, comparison, attribution, settings, *, seed: int = 0) -> None:
+    """Let the measurement's further channels settle the claimed effect against its rivals
+    (:mod:`compare.channels`); the unexplained disagreements follow the new claim."""
+    from compare.channels import apply_resolution, resolve_rivals
+
+    res = resolve_rivals(ref, comparison.model, attribution, settings, seed=seed)
+    if res is None:
+        return
+    apply_resolution(attribution, res)
+    explained = {k for c in attribution.candidates if c.claimed for k in c.explains}
+    attribution.unexplained = [d.to_dict() for d in comparison.disagreements
+                               if abs(d.residual_db) >= settings.unexplained_db and d.key not in explained]
+
+
 def explains(attribution) -> bool:
     """Whether ``attribution`` claims an effect that lowers the excess error by :data:`EXPLAINED_REDUCTION`."""
     return any(c.claimed and c.reduction >= EXPLAINED_REDUCTION for c in attribution.candidates)
@@ -106,7 +120,8 @@ def compare_and_attribute(measurement, model, *, reference=None, calibrate=None,
     (module docstring); ``calibrate`` None: as the model says. Without ``attribution`` there is nothing to
     escalate on, so "auto" compares once with the drive train the model holds (after ``gearpit compare --add``:
     the nuisances the added effect was fitted with)."""
-    from compare.attribution import AttributionSettings, attribute
+    from compare.attribution import attribute
+    from compare.candidates import AttributionSettings
     from compare.calibration import calibrated_compare
     from compare.comparison import prepare_reference
 
@@ -120,6 +135,7 @@ def compare_and_attribute(measurement, model, *, reference=None, calibrate=None,
         if attribution:
             a = attribute(ref, c.model, c.evaluation.residuals.residual_db, candidates=candidates, settings=settings,
                           disagreements=c.disagreements, parallel=parallel, calibration=c.calibration)
+            settle_rivals(ref, c, a, settings, seed=seed)
         return c, a
 
     c, a = one_pass(mode is True)

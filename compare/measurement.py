@@ -15,6 +15,9 @@ key                        required  meaning
 ``tacho_pulses_per_rev``   no        pulses per revolution of ``tacho_shaft`` (default 1)
 ``tacho_shaft``            no        ``"pinion"`` (default) or ``"wheel"``
 ``fault``                  no        free label (``"healthy"``, ``"pitting_L"``, ...)
+``secondary``              no        further channels: a table {column: simulated channel}, e.g.
+                                     ``{te_um = "dte_m"}`` (:mod:`compare.channels`: they settle effects
+                                     the sensor cannot tell apart); each column's gain is fitted
 ``channels``               no        names of the columns of a file without names
 ``time_column``            no        CSV column holding time (s) (default: one named ``time``/``t``)
 ``variable``               no        NPZ/MAT variable to read when the file holds several
@@ -33,7 +36,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -44,7 +47,7 @@ from gearpit.errors import InputError, require, require_positive
 from gearpit.tomlio import check_keys, read_toml
 
 SIDECAR_KEYS = ("fs_hz", "speed_rpm", "torque_nm", "pair", "sensor", "tacho", "tacho_pulses_per_rev", "tacho_shaft",
-                "fault", "channels", "time_column", "variable", "format", "start_s", "duration_s")
+                "fault", "channels", "time_column", "variable", "format", "start_s", "duration_s", "secondary")
 SIDECAR_SUFFIXES = (".toml", ".json", ".meta.toml", ".meta.json")
 MIN_REVOLUTIONS = 2.0
 
@@ -68,6 +71,7 @@ class Sidecar:
     format: str = "auto"
     start_s: float = 0.0
     duration_s: float | None = None
+    secondary: dict | None = None
 
     @classmethod
     def from_dict(cls, d: dict, where: str = "sidecar") -> "Sidecar":
@@ -113,6 +117,8 @@ class Sidecar:
         if "format" in d:
             require(d["format"] in FORMATS, f"{where}.format", d["format"], "one of: " + ", ".join(FORMATS))
             kw["format"] = d["format"]
+        if "secondary" in d:
+            kw["secondary"] = _secondary(d["secondary"], f"{where}.secondary")
         return cls(**kw)
 
     def to_dict(self) -> dict:
@@ -120,8 +126,27 @@ class Sidecar:
         out = {k: getattr(self, k) for k in SIDECAR_KEYS if k != "pair" and getattr(self, k) is not None}
         if self.channels is not None:
             out["channels"] = list(self.channels)
+        if self.secondary is not None:
+            out["secondary"] = dict(self.secondary)
         out["pair"] = self.pair.to_dict()
         return out
+
+
+def simulated_channels() -> tuple[str, ...]:
+    """Names of the channels a simulation outputs (:mod:`datagen.output_channels`; axial ones for helical pairs
+    only), the tacho pulses excepted."""
+    from datagen.output_channels import channel_names
+
+    return tuple(c for c in channel_names(8) if not c.startswith("_"))
+
+
+def _secondary(value, where: str) -> dict:
+    sim = simulated_channels()
+    require(isinstance(value, dict) and value, where, value, "a table {measured column: simulated channel}")
+    for col, ch in value.items():
+        require(isinstance(col, str) and col, where, col, "column names")
+        require(ch in sim, f"{where}.{col}", ch, "a simulated channel: " + ", ".join(sim))
+    return {str(k): str(v) for k, v in value.items()}
 
 
 def _pair(value, where: str):
@@ -187,6 +212,8 @@ class Measurement:
     sidecar: Sidecar
     source: str = ""
     fault: str | None = None
+    #: further channels: measured column -> the simulated channel it corresponds to (sidecar ``secondary``)
+    secondary: dict = field(default_factory=dict)
 
     @property
     def signal(self) -> np.ndarray:
@@ -244,11 +271,16 @@ def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "
     require(i1 <= data[sensor].size, "start_s + duration_s", sidecar.start_s + (sidecar.duration_s or 0.0),
             f"<= the record length {data[sensor].size / fs:.4g} s")
     data = {k: v[i0:i1] for k, v in data.items()}
-    for key in (sensor,) + ((tacho,) if tacho else ()):
+    secondary = dict(sidecar.secondary or {})
+    for col in secondary:
+        require(col in names, f"secondary.{col}", col, "a column of the file: " + ", ".join(names))
+        require(col not in (sensor, tacho), f"secondary.{col}", col, "a channel other than the sensor and the tacho")
+    for key in (sensor,) + ((tacho,) if tacho else ()) + tuple(secondary):
         bad = np.nonzero(~np.isfinite(data[key]))[0]
         require(bad.size == 0, f"channel {key}", f"{bad.size} NaN/inf samples, first at index {bad[:1].tolist()}",
                 "finite samples only")
-    require(float(np.ptp(data[sensor])) > 0, f"channel {sensor}", "constant", "a varying vibration signal")
+    for key in (sensor,) + tuple(secondary):
+        require(float(np.ptp(data[key])) > 0, f"channel {key}", "constant", "a varying signal")
     pair = sidecar.pair
     slow_hz = pair.shaft_frequency_hz("wheel" if pair.wheel.teeth >= pair.pinion.teeth else "pinion", float(speed))
     n_min = int(math.ceil(MIN_REVOLUTIONS * fs / slow_hz))
@@ -257,7 +289,8 @@ def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "
             f"({MIN_REVOLUTIONS / slow_hz:.3g} s at {float(speed):g} rpm)")
     fault = sidecar.fault if sidecar.fault is not None else hints.get("fault")
     return Measurement(channels=data, fs_hz=float(fs), sensor=sensor, tacho=tacho, speed_rpm=float(speed),
-                       torque_nm=float(torque), pair=pair, sidecar=sidecar, source=source, fault=fault)
+                       torque_nm=float(torque), pair=pair, sidecar=sidecar, source=source, fault=fault,
+                       secondary=secondary)
 
 
 def load_measurement(path: str | Path, sidecar: Sidecar | str | Path | None = None) -> Measurement:

@@ -199,6 +199,10 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
                      "and raises no view's error by more than 1 dB (or a quarter of its fall of the total, when "
                      "larger); a time-stepped effect is fitted on a window and measured on the whole record "
                      "before it is ranked.</p>")
+        if att.get("resolution"):
+            from compare.channels import resolution_message
+
+            parts.append("<p><b>Further channels:</b> " + html.escape(resolution_message(att["resolution"])) + ".</p>")
         if att.get("rivals"):
             parts.append("<p><b>Not distinguishable from the claimed " + html.escape(", ".join(att["claimed"]))
                          + ":</b> " + html.escape(", ".join(att["rivals"])) + " lowers the error almost as much "

@@ -118,7 +118,20 @@ SCHEMA = {
                            "description": "effects that pass the claim rule within 5 % of the claimed one's "
                                           "reduction: these views cannot tell them apart"},
                 "elapsed_s": {"type": "number"}, "n_simulations": {"type": "integer"},
-                "group_seconds": {"type": "object"}}},
+                "group_seconds": {"type": "object"},
+                "resolution": {"type": ["object", "null"],
+                               "description": "what the measurement's further channels (sidecar secondary) said "
+                                              "about the claimed effect and its rivals (compare.channels); null "
+                                              "without further channels or rivals",
+                               "properties": {"channels": {"type": "object"},
+                                              "baseline_error_db": {"type": "object"},
+                                              "error_db": {"type": "object",
+                                                           "description": "effect -> column -> excess error (dB)"},
+                                              "reduction": {"type": "object"},
+                                              "claimed": {"type": ["string", "null"]},
+                                              "before": {"type": "string"},
+                                              "rivals": {"type": "array", "items": {"type": "string"}},
+                                              "note": {"type": "string"}}}}},
         "escalation": {
             "type": "object",
             "description": "how the calibration mode played out (compare.escalation); absent from documents "

@@ -21,6 +21,8 @@ from gearpit.errors import require
 NUISANCE = {"mesh_damping_ratio": 0.06, "bearing_n_per_m": 1.15e8, "bearing_damping_ratio": 0.06}
 SENSOR_GAIN = 3.7
 SNR_DB = 30.0
+#: the further channel of a rig with encoders: the transmission error in micrometres (the model's is in metres)
+TE_SCALE = 1e6
 #: rigs unlike the one the examples were chosen on (experiments/generalisation_check.py): name -> (keyword
 #: arguments of rig_measurement, dB less SNR than the example). "helical": another pair, speed and gain, the
 #: drive train 2-3 times off the defaults; "soft" (checked after the "auto" calibration was chosen on the other
@@ -98,12 +100,15 @@ HIDDEN_EXAMPLES = {
 def rig_measurement(effects=(), *, speed_rpm: float = 1000.0, torque_nm: float = 50.0, duration_s: float = 2.0,
                     fs_hz: float = 20000.0, pair: str = "spur-gds", snr_db: float = SNR_DB,
                     gain: float = SENSOR_GAIN, nuisance: dict | None = None, seed: int = 3,
-                    nominal_speed_rpm: float | None = None, extra=None):
+                    nominal_speed_rpm: float | None = None, extra=None, encoders: bool = False):
     """A simulated 'measurement' (a :class:`compare.measurement.Measurement`) of a rig with ``effects``.
 
     ``extra(t_s) -> ndarray`` adds a disturbance outside the registry (in sensor units, after the gain).
     The sidecar's nominal speed is ``nominal_speed_rpm`` (default: 0.5 % above the true speed, so that the
-    comparison has to refine it). Channels: ``acc`` (sensor) and ``tacho`` (once per pinion revolution).
+    comparison has to refine it). Channels: ``acc`` (sensor) and ``tacho`` (once per pinion revolution); with
+    ``encoders`` also ``te_um``, the transmission error of two shaft encoders in micrometres (:data:`TE_SCALE`
+    times ``dte_m``) with white noise ``snr_db`` under its own RMS (its own draw), named as a further channel
+    (sidecar ``secondary``, :mod:`compare.channels`).
     """
     from datagen.geometry import preset
     from datagen.lumped_model import DriveTrain
@@ -118,9 +123,15 @@ def rig_measurement(effects=(), *, speed_rpm: float = 1000.0, torque_nm: float =
     if extra is not None:
         x = x + extra(np.arange(x.size) / fs_hz)
     require(np.all(np.isfinite(x)), "simulated measurement", "non-finite", "finite samples")
+    channels = {"acc": x, "tacho": sig.channels["tacho_pinion"]}
+    if encoders:
+        te = sig.channels["dte_m"]
+        rng = np.random.default_rng([seed, 1])              # not the rig's draw: the encoders' own noise
+        noise = 0.0 if snr_db is None else np.std(te) * 10 ** (-snr_db / 20) * rng.standard_normal(te.size)
+        channels["te_um"] = TE_SCALE * (te + noise)
     sc = Sidecar(pair=p, speed_rpm=nominal_speed_rpm or 1.005 * speed_rpm, torque_nm=torque_nm, fs_hz=fs_hz,
-                 sensor="acc", tacho="tacho")
-    return measurement_from_arrays({"acc": x, "tacho": sig.channels["tacho_pinion"]}, sc, source="simulated rig")
+                 sensor="acc", tacho="tacho", secondary={"te_um": "dte_m"} if encoders else None)
+    return measurement_from_arrays(channels, sc, source="simulated rig")
 
 
 def hidden_effect_measurement(name: str, *, seed: int = 3, **kw):
@@ -181,7 +192,7 @@ def run_hidden_case(name: str, *, calibrate: bool | str | None = None, candidate
 def case_checks(name: str, example: HiddenExample, first, attribution, second) -> dict:
     """The issue's three checks on one hidden-effect run (:func:`run_hidden_case`'s outputs), as a dict:
     ``ranks_first_and_claimed`` (strict), ``rival_of_claimed`` (the hidden effect is not first but is a rival of
-    the claimed effect: the views cannot tell them apart, :func:`compare.attribution.rivals_of`), ``halves``
+    the claimed effect: the views cannot tell them apart, :func:`compare.candidates.rivals_of`), ``halves``
     (the error after adding the claimed/best effect is at most half the error before) and ``fit_ok`` (the hidden
     effect's own fit, wherever it ranks, within the example's tolerance), with ``fit`` saying so."""
     top = attribution.candidates[0]

@@ -25,7 +25,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from compare.attribution import Attribution, AttributionSettings
+from compare.candidates import Attribution, AttributionSettings
+from compare.channels import resolution_message
 from compare.comparison import Comparison, prepare_reference
 from compare.escalation import EXPLAINED_REDUCTION, compare_and_attribute
 from compare.ledger import append_row, last_candidate, ledger_path, make_row, read_ledger
@@ -119,6 +120,8 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
     if cal is not None:
         messages.append("nuisances calibrated: " + ", ".join(f"{k} {v:.4g}" for k, v in cal.values.items())
                         + f" (error {cal.error_before_db:.2f} -> {cal.error_db:.2f} dB)")
+    if att is not None and att.resolution is not None:
+        messages.append(resolution_message(att.resolution))
     if att is not None and att.claimed and att.rivals:
         messages.append(f"claimed {att.claimed[0].effect}, but {', '.join(att.rivals)} lowers the error almost as "
                         "much: these views cannot tell them apart")
@@ -193,3 +196,4 @@ def hidden_effect_loop(out: str | Path, hidden: str = "pitch_error", *, seed: in
                "calibration_before": cal0.to_dict() if cal0 is not None else None,
                "calibration_after": cal1.to_dict() if (cal1 is not None and claimed) else None}
     return summary, first, second
+

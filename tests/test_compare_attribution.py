@@ -25,7 +25,6 @@ import functools
 import numpy as np
 import pytest
 
-from compare.attribution import attribute
 from compare.calibration import calibrate, calibrated_compare
 from compare.escalation import compare_and_attribute
 from compare.comparison import compare, prepare_reference
@@ -86,7 +85,7 @@ def test_disturbance_outside_the_registry_is_unexplained(disturbance):
 NUISANCE_LIMITED: dict = {}
 
 #: pairs of effects whose signatures in these views coincide (name -> its twin). Source: the simulator's truth and
-#: compare.attribution.rivals_of. A speed fluctuation at the motor and a torque fluctuation at the load at the same
+#: compare.candidates.rivals_of. A speed fluctuation at the motor and a torque fluctuation at the load at the same
 #: frequency both excite the drive train's torsion, and the strongest mesh harmonic carries the same amplitude-to-
 #: phase modulation ratio for both (-24 dB at 23 Hz on spur-gds, measured by demodulation); once both fits were
 #: refined (compare.search.round_fine) and measured on the whole record, each hidden one was fitted by its twin
@@ -279,7 +278,7 @@ def test_claim_needs_the_reduction_and_no_view_traded():
     """choose_claim: the best candidate above the claim threshold whose views all stay within
     max_view_rise_db of the baseline's; a candidate that fits one view by spoiling another (the mains-hum
     case: band 7.1 -> 3.1 dB, order 0.7 -> 3.3 dB) is passed over; nothing below the threshold is claimed."""
-    from compare.attribution import AttributionSettings, CandidateResult, choose_claim
+    from compare.candidates import AttributionSettings, CandidateResult, choose_claim
 
     base = {"order": 0.66, "band": 7.07, "envelope": 0.68}
 
@@ -316,7 +315,7 @@ def test_rivals_are_the_effects_the_views_cannot_tell_from_the_claim():
     (the calibrated helical rig of experiments/generalisation_check.py: a hidden speed fluctuation, torque
     fluctuation 75.8 % against speed fluctuation 75.x %). A close candidate that trades views, or one 6 % behind,
     or one not confirmed on the whole record, is no rival; nothing claimed -> no rivals."""
-    from compare.attribution import AttributionSettings, CandidateResult, choose_claim, rivals_of
+    from compare.candidates import AttributionSettings, CandidateResult, choose_claim, rivals_of
 
     base = {"order": 10.0, "envelope": 8.0}
 

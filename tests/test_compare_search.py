@@ -103,9 +103,9 @@ def test_fine_ladders_close_in_on_a_minimum_between_grid_points():
 
 
 def test_distinct_runners_up_of_a_ragged_window_fit():
-    """compare.attribution._distinct_best: the best trial and the next best ones at least 0.03 apart in the search
+    """compare.fitting._distinct_best: the best trial and the next best ones at least 0.03 apart in the search
     coordinate (a ragged surface: two trials 0.01 apart count once)."""
-    from compare.attribution import _distinct_best
+    from compare.fitting import _distinct_best
 
     p = FitParameter("backlash_m", 0.0, 1e-3, "m", 1e-4, True)
     s = Search(None, FitSpace("stand_in", (p,), None, True), None)
@@ -180,7 +180,8 @@ def test_a_window_fit_is_claimed_only_if_it_holds_on_the_whole_record():
     whole record's error (nothing of it is in the rig): not confirmed, its errors replaced by the whole record's,
     not claimed. On a rig with a hidden 1 % / 23 Hz speed fluctuation the true effect is confirmed, with a whole-record
     reduction of at least the claim threshold."""
-    from compare.attribution import AttributionSettings, CandidateResult, _confirm_on_record, choose_claim
+    from compare.attribution import _confirm_on_record
+    from compare.candidates import AttributionSettings, CandidateResult, choose_claim
     from compare.comparison import compare, prepare_reference
     from compare.model import ComparisonModel
     from compare.synthetic import rig_measurement
@@ -213,10 +214,10 @@ def test_a_window_fit_is_claimed_only_if_it_holds_on_the_whole_record():
 
 
 def test_time_stepped_candidates_split_by_contact_law():
-    """compare.attribution.transient_groups: the effect with a nonlinear mesh law (backlash: contact loss, the slow
+    """compare.fitting.transient_groups: the effect with a nonlinear mesh law (backlash: contact loss, the slow
     batch) is fitted apart from the fluctuations, which stay together (a batch costs about the same for one case or
     many); a single kind gives a single group, and no name is lost or repeated."""
-    from compare.attribution import transient_groups
+    from compare.fitting import transient_groups
 
     groups = transient_groups(["speed_fluctuation", "backlash", "torque_fluctuation"])
     assert groups == [["backlash"], ["speed_fluctuation", "torque_fluctuation"]]
