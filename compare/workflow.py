@@ -141,16 +141,18 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
 
 
 def write_rig_files(measurement, out: str | Path, *, stem: str = "rig") -> Path:
-    """Write a measurement (sensor ``acc`` and ``tacho`` channels) as ``stem.csv`` + ``stem.toml`` in ``out``,
-    the way a rig would deliver it; returns the CSV path."""
+    """Write a measurement (sensor ``acc``, ``tacho`` and any further channels) as ``stem.csv`` + ``stem.toml`` in
+    ``out``, the way a rig would deliver it; returns the CSV path."""
     import numpy as np
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     t = np.arange(measurement.n_samples) / measurement.fs_hz
     csv = out / f"{stem}.csv"
-    np.savetxt(csv, np.column_stack([t, measurement.channels["acc"], measurement.channels["tacho"]]), delimiter=",",
-               header="time_s,acc_x,tacho", comments="", fmt="%.10g")
+    more = list(measurement.secondary)
+    np.savetxt(csv, np.column_stack([t, measurement.channels["acc"], measurement.channels["tacho"]]
+                                    + [measurement.channels[c] for c in more]), delimiter=",",
+               header=",".join(["time_s", "acc_x", "tacho"] + more), comments="", fmt="%.10g")
     from compare.model import to_toml
     from datagen.geometry import PRESETS, preset
 
@@ -158,6 +160,8 @@ def write_rig_files(measurement, out: str | Path, *, stem: str = "rig") -> Path:
     known = pair.name in PRESETS and preset(pair.name) == pair
     side = {"speed_rpm": measurement.speed_rpm, "torque_nm": measurement.torque_nm, "sensor": "acc_x",
             "tacho": "tacho", "pair": pair.name if known else pair.to_dict()}
+    if more:
+        side["secondary"] = dict(measurement.secondary)
     (out / f"{stem}.toml").write_text(to_toml(side), encoding="utf-8")
     return csv
 
