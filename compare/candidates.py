@@ -20,7 +20,9 @@ threshold there is then measured on the whole record, with the baseline
 and the claim use them; one that fails the tests there is marked "not
 confirmed on the whole record" and is not claimed.
 Other effects that also pass the threshold are listed as alternatives
-(several effects can leave similar lines). A disagreement of the baseline larger than
+(several effects can leave similar lines); those within ``rival_reduction`` of
+the claimed one are its *rivals* (:func:`rivals_of`): these views cannot tell
+them apart, and further measured channels may (:mod:`compare.channels`). A disagreement of the baseline larger than
 ``unexplained_db`` that no claimed effect halves is reported as unexplained:
 nothing in the registry accounts for it, and no attribution is forced.
 """
@@ -34,7 +36,7 @@ from compare.error import combine, excess
 
 @dataclass(frozen=True)
 class AttributionSettings:
-    """Knobs of :func:`attribute` (defaults used everywhere unless said otherwise)."""
+    """Knobs of :func:`compare.attribution.attribute` (defaults used everywhere unless said otherwise)."""
 
     claim_reduction: float = 0.30
     max_view_rise_db: float = 1.0
