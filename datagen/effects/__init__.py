@@ -1,6 +1,7 @@
 """Physical effects that plug into the simulation at fixed contribution points.
 
-- ``base``              the contract: :class:`Effect`, registry, :class:`EffectSpec`, plugins
+- ``base``              the contract: :class:`Effect`, its context and the contribution hooks
+- ``registry``          effects by name: :func:`register`, :func:`get`, plugins, :class:`EffectSpec`
 - ``noise``             white measurement noise at an SNR (measurement chain)
 - ``transmission_path`` bearing force -> housing mode -> housing acceleration (output path)
 - ``backlash``          dead-zone mesh law with contact loss (nonlinear mesh law)

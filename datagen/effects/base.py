@@ -120,12 +120,8 @@ References
 """
 from __future__ import annotations
 
-import dataclasses
-import importlib.util
 import math
-import sys
 from dataclasses import dataclass, fields
-from pathlib import Path
 from typing import Any, ClassVar
 
 import numpy as np
@@ -136,9 +132,6 @@ from gearpit.errors import InputError
 #: the contribution points, in simulation order (method names on :class:`Effect`)
 HOOKS = ("mesh_stiffness", "tooth_deviation_m", "angle_deviation_m", "centre_offset_m", "generalized_force",
          "mesh_force_batch", "operating_point", "output_path", "measurement")
-
-_REGISTRY: dict[str, type["Effect"]] = {}
-
 
 @dataclass(frozen=True)
 class EffectContext:
@@ -348,139 +341,10 @@ class Effect:
         return channels
 
 
-# ---------------------------------------------------------------------- registry
-def register(effect_cls: type[Effect]) -> type[Effect]:
-    """Class decorator: add an :class:`Effect` subclass to the registry under its ``name``."""
-    if not (isinstance(effect_cls, type) and issubclass(effect_cls, Effect)):
-        raise InputError("effect", effect_cls, "a subclass of datagen.effects.base.Effect")
-    if not dataclasses.is_dataclass(effect_cls) or not effect_cls.__dataclass_params__.frozen:
-        raise InputError(f"effect {effect_cls.__name__}", "not a frozen dataclass", "@dataclass(frozen=True)")
-    name = effect_cls.name
-    if not (isinstance(name, str) and name.replace("_", "").isalnum() and name == name.lower()):
-        raise InputError(f"effect {effect_cls.__name__}.name", name, "a short lower-case identifier")
-    if not effect_cls.signature:
-        raise InputError(f"effect {name}.signature", "", "one line describing the signature it leaves")
-    for f in fields(effect_cls):
-        if f.default is dataclasses.MISSING:
-            raise InputError(f"effect {name}.{f.name}", "no default", "every parameter needs a default")
-        if "unit" not in f.metadata or ("bounds" not in f.metadata and "choices" not in f.metadata):
-            raise InputError(f"effect {name}.{f.name}", dict(f.metadata), "metadata with 'unit' and 'bounds' (or 'choices')")
-    effect_cls.fit_declaration()  # a bad fit declaration is refused at registration, not mid-comparison
-    old = _REGISTRY.get(name)
-    if old is not None and (old.__module__, old.__qualname__) != (effect_cls.__module__, effect_cls.__qualname__):
-        raise InputError("effect name", name, f"a name not yet taken (by {old.__module__}.{old.__qualname__})")
-    _REGISTRY[name] = effect_cls
-    return effect_cls
-
-
-def unregister(name: str) -> None:
-    """Remove an effect from the registry (tests, or reloading a user's plugin)."""
-    _REGISTRY.pop(name, None)
-
-
-def get(name: str) -> type[Effect]:
-    """The effect class registered under ``name``."""
-    if name not in _REGISTRY:
-        raise InputError("effects.name", name, f"one of: {', '.join(names())}")
-    return _REGISTRY[name]
-
-
-def names() -> list[str]:
-    """All registered effect names, sorted."""
-    return sorted(_REGISTRY)
-
-
-def load_plugin(path: str | Path) -> list[str]:
-    """Import a user's Python file so that its ``@register`` effects join the registry.
-
-    Returns the names that the file added.
-    """
-    p = Path(path)
-    if not p.is_file() or p.suffix != ".py":
-        raise InputError("plugin", str(p), "an existing .py file")
-    before = set(_REGISTRY)
-    mod_name = f"gearpit_plugin_{p.stem}_{abs(hash(str(p.resolve()))) % 10**8}"
-    spec = importlib.util.spec_from_file_location(mod_name, p)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[mod_name] = module
-    spec.loader.exec_module(module)
-    return sorted(set(_REGISTRY) - before)
-
-
-# ---------------------------------------------------------------------- specs (file / CLI boundary)
-@dataclass(frozen=True)
-class EffectSpec:
-    """An effect by name plus parameters, as read from a case file or the command line.
-
-    Parameters
-    ----------
-    name : str
-        Registered effect name.
-    params : tuple of (str, value)
-        Parameter overrides (SI units, names as the dataclass fields).
-    """
-
-    name: str
-    params: tuple = ()
-
-    @classmethod
-    def from_dict(cls, d: dict, where: str = "effects") -> "EffectSpec":
-        """From a TOML table ``{name = "noise", snr_db = 30.0}``; unknown names/keys raise."""
-        if not isinstance(d, dict) or "name" not in d:
-            raise InputError(where, d, "a table with a 'name' key")
-        effect_cls = get(d["name"])
-        allowed = {f.name for f in fields(effect_cls)}
-        for key in d:
-            if key != "name" and key not in allowed:
-                raise InputError(f"{where}.{d['name']}.{key}", d[key],
-                                 f"a parameter of {d['name']}: {', '.join(sorted(allowed)) or '(none)'}")
-        spec = cls(name=d["name"], params=tuple(sorted((k, v) for k, v in d.items() if k != "name")))
-        spec.build()  # validate now, before any work
-        return spec
-
-    @classmethod
-    def from_string(cls, text: str) -> "EffectSpec":
-        """From the CLI form ``name:key=value,key=value`` (values parsed as numbers when they can be)."""
-        name, _, rest = text.partition(":")
-        d: dict[str, Any] = {"name": name.strip()}
-        for item in filter(None, (s.strip() for s in rest.split(","))):
-            key, eq, val = item.partition("=")
-            if not eq:
-                raise InputError("effect", text, "name:key=value,key=value")
-            try:
-                d[key.strip()] = float(val) if any(c in val for c in ".eE") else int(val)
-            except ValueError:
-                d[key.strip()] = val.strip()
-        return cls.from_dict(d, where="effect")
-
-    def build(self) -> Effect:
-        """The effect instance (validates the parameters against their bounds)."""
-        effect_cls = get(self.name)
-        params = dict(self.params)
-        for f in fields(effect_cls):  # ints from TOML for float fields are fine
-            if f.name in params and f.type in ("float", float) and isinstance(params[f.name], int) \
-                    and not isinstance(params[f.name], bool):
-                params[f.name] = float(params[f.name])
-        return effect_cls(**params)
-
-
-def build_effects(items) -> tuple[Effect, ...]:
-    """Effects from a sequence of :class:`Effect`, :class:`EffectSpec` or dicts; at most one nonlinear mesh law."""
-    out = []
-    for i, item in enumerate(items or ()):
-        if isinstance(item, Effect):
-            out.append(item)
-        elif isinstance(item, EffectSpec):
-            out.append(item.build())
-        elif isinstance(item, dict):
-            out.append(EffectSpec.from_dict(item, where=f"effects[{i}]").build())
-        else:
-            raise InputError(f"effects[{i}]", item, "an Effect, EffectSpec or {name = ..., ...} table")
-    if sum(e.is_nonlinear for e in out) > 1:
-        raise InputError("effects", [e.name for e in out if e.is_nonlinear], "at most one nonlinear mesh law")
-    return tuple(out)
-
+# the registry and effect specs live in datagen.effects.registry; re-exported here, where effect modules and users'
+# plugins import them from (module docstring)
+from datagen.effects.registry import (EffectSpec, build_effects, get, load_plugin, names, register,  # noqa: E402
+                                      unregister)
 
 __all__ = ["Effect", "EffectContext", "EffectSpec", "Fit", "MeshState", "HOOKS", "register", "unregister", "get",
-           "names",
-           "load_plugin", "build_effects"]
+           "names", "load_plugin", "build_effects"]
