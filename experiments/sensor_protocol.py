@@ -286,14 +286,17 @@ ABLATIONS = {
 }
 # tsa_lp_load with the pitted-teeth profile (models/tooth_profile.py) as further side inputs, on each split and
 # training seed: "tsa_lp_profile[_load|_in_domain][_seedN]" (the speed split and seed 0 carry no suffix)
-# tsa_te with the profile too: both shafts' first order removed from the TSA input and the RMS (blind to encoder
-# eccentricity), the profile (which removes them itself) added
-ABLATIONS["tsa_te_profile_in_domain"] = ("in_domain", {
-    "representation": replace(_tsa_lowpass(1.25), remove_shaft_1x=True),
-    "operating_inputs": ("torque_nm", "signal_rms_no1x", "tooth_profile")}, True, SECOND)
-ABLATIONS.update({"tsa_lp_profile" + ("" if split == "speed" else f"_{split}") + (f"_seed{seed}" if seed else ""):
-                  (split, _lp_load(1.25, operating_inputs=PROFILE, seed=seed), True, SECOND)
-                  for split in ("speed", "load", "in_domain") for seed in (0, 1, 2)})
+# tsa_lp_load with the pitted-teeth profile (models/tooth_profile.py) as further side inputs, and tsa_te with it too
+# (both shafts' first order removed from the TSA input and the RMS, so blind to encoder eccentricity; the profile
+# removes them itself), on each split and training seed: "<name>[_load|_in_domain][_seedN]" (the speed split and
+# seed 0 carry no suffix)
+_PROFILE_MODELS = {"tsa_lp_profile": _lp_load(1.25, operating_inputs=PROFILE),
+                   "tsa_te_profile": {"representation": replace(_tsa_lowpass(1.25), remove_shaft_1x=True),
+                                      "operating_inputs": ("torque_nm", "signal_rms_no1x", "tooth_profile")}}
+ABLATIONS.update({name + ("" if split == "speed" else f"_{split}") + (f"_seed{seed}" if seed else ""):
+                  (split, {**cfg, "seed": seed}, True, SECOND)
+                  for name, cfg in _PROFILE_MODELS.items() for split in ("speed", "load", "in_domain")
+                  for seed in (0, 1, 2)})
 
 
 def run_ablation(name: str, data_dir: Path, channel: str = "dte_m", variant: str = "tsa_level") -> dict:
