@@ -78,12 +78,16 @@ NO_SPEED = ("torque_nm", "signal_rms")
 #: once-per-revolution errors reach neither input (a high-pass at 2.5 orders did that too, but also took the low
 #: orders of the pit's dip: ablations te_hp_*; why: RESULTS.md, sensor section)
 #: ``tsa_lp_profile``: as ``tsa_lp_load``, with the pitted-teeth profile (models/tooth_profile.py: how many tooth
-#: pitches the TSA's deviation covers, after both shafts' first order is removed) as 12 more side inputs
+#: pitches the TSA's deviation covers, after both shafts' first order is removed) as 12 more side inputs;
+#: ``tsa_te_profile``: ``tsa_te`` with the profile too (blind to encoder eccentricity; run as ablations
+#: ``tsa_te_profile*``, not in the protocol's own runs)
 PROFILE = NO_SPEED + ("tooth_profile",)
 SENSOR_VARIANTS = {"tsa_op": VARIANTS_ALL["tsa_op"], "tsa_level": VARIANTS_ALL["tsa_level"],
                    "tsa_lp_load": (_tsa_lowpass(1.25), NO_SPEED),
                    "tsa_te": (replace(_tsa_lowpass(1.25), remove_shaft_1x=True), ("torque_nm", "signal_rms_no1x")),
-                   "tsa_lp_profile": (_tsa_lowpass(1.25), PROFILE)}
+                   "tsa_lp_profile": (_tsa_lowpass(1.25), PROFILE),
+                   "tsa_te_profile": (replace(_tsa_lowpass(1.25), remove_shaft_1x=True),
+                                      ("torque_nm", "signal_rms_no1x", "tooth_profile"))}
 #: the variants each channel runs (the low-passed one is a transmission-error model: on the accelerometer the
 #: pit's quasi-static dip is not what the sensor sees)
 CHANNEL_VARIANTS = {"acc_pinion_loa_m_s2": ("tsa_op", "tsa_level"), "dte_m": VARIANTS}
@@ -290,9 +294,8 @@ ABLATIONS = {
 # (both shafts' first order removed from the TSA input and the RMS, so blind to encoder eccentricity; the profile
 # removes them itself), on each split and training seed: "<name>[_load|_in_domain][_seedN]" (the speed split and
 # seed 0 carry no suffix)
-_PROFILE_MODELS = {"tsa_lp_profile": _lp_load(1.25, operating_inputs=PROFILE),
-                   "tsa_te_profile": {"representation": replace(_tsa_lowpass(1.25), remove_shaft_1x=True),
-                                      "operating_inputs": ("torque_nm", "signal_rms_no1x", "tooth_profile")}}
+_PROFILE_MODELS = {name: {"representation": SENSOR_VARIANTS[name][0], "operating_inputs": SENSOR_VARIANTS[name][1]}
+                   for name in ("tsa_lp_profile", "tsa_te_profile")}
 ABLATIONS.update({name + ("" if split == "speed" else f"_{split}") + (f"_seed{seed}" if seed else ""):
                   (split, {**cfg, "seed": seed}, True, SECOND)
                   for name, cfg in _PROFILE_MODELS.items() for split in ("speed", "load", "in_domain")
