@@ -50,7 +50,9 @@ def run(args: argparse.Namespace) -> int:
         for cand in out.attribution.candidates:
             ps = ", ".join(f"{k}={v:.4g} +/- {cand.sigma[k]:.2g}" if k in cand.sigma else f"{k}={v}"
                            for k, v in cand.params.items())
-            mark = "  <- claimed" if cand.claimed else ""
+            res = out.attribution.resolution
+            settled = res is not None and res.get("claimed") == cand.effect and res.get("before") != cand.effect
+            mark = ("  <- claimed" + (" (on the further channels)" if settled else "")) if cand.claimed else ""
             print(f"  {cand.effect:20s} {100 * cand.reduction:6.1f} %  {ps}{mark}")
         for u in out.attribution.unexplained:
             print(f"  unexplained by every registered effect: {u['text']}")
