@@ -29,7 +29,7 @@ import time
 import numpy as np
 
 from compare.candidates import (Attribution, AttributionSettings, CandidateResult, choose_claim, passes_claim_rule,
-                                rivals_of)
+                                rivals_of, unexplained_of)
 from compare.comparison import NOISE_DRAWS, Reference, evaluate, simulate_model
 from compare.error import effective_count
 from compare.fitspace import CHAIN_EFFECTS, fit_space
@@ -118,10 +118,7 @@ def attribute(ref: Reference, model, baseline_residual: np.ndarray, *, candidate
             c.nuisance = c.nuisance or dict(calibration.values)
     results.sort(key=lambda c: -c.reduction)
     claimed = choose_claim(results, settings)
-    explained = {k for c in results if c.claimed for k in c.explains}
-    unexplained = [d.to_dict() for d in disagreements
-                   if abs(d.residual_db) >= settings.unexplained_db and d.key not in explained]
-    return Attribution(candidates=results, unexplained=unexplained, elapsed_s=time.perf_counter() - t0,
+    return Attribution(candidates=results, unexplained=unexplained_of(results, disagreements, settings), elapsed_s=time.perf_counter() - t0,
                        n_simulations=n_sims, group_seconds=seconds, rivals=rivals_of(claimed, results, settings))
 
 

@@ -168,3 +168,10 @@ def rivals_of(claimed: CandidateResult | None, results: list, settings: Attribut
         return []
     return [c.effect for c in results if c is not claimed and c.status == "fitted" and passes_claim_rule(c, settings)
             and claimed.reduction - c.reduction <= settings.rival_reduction]
+
+
+def unexplained_of(results: list, disagreements, settings: AttributionSettings) -> list[dict]:
+    """The disagreements of at least ``unexplained_db`` that no claimed candidate of ``results`` halves."""
+    explained = {k for c in results if c.claimed for k in c.explains}
+    return [d.to_dict() for d in disagreements if abs(d.residual_db) >= settings.unexplained_db
+            and d.key not in explained]

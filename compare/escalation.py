@@ -91,15 +91,14 @@ class Staged:
 def settle_rivals(ref, comparison, attribution, settings, *, seed: int = 0) -> None:
     """Let the measurement's further channels settle the claimed effect against its rivals
     (:mod:`compare.channels`); the unexplained disagreements follow the new claim."""
+    from compare.candidates import unexplained_of
     from compare.channels import apply_resolution, resolve_rivals
 
     res = resolve_rivals(ref, comparison.model, attribution, settings, seed=seed)
     if res is None:
         return
     apply_resolution(attribution, res)
-    explained = {k for c in attribution.candidates if c.claimed for k in c.explains}
-    attribution.unexplained = [d.to_dict() for d in comparison.disagreements
-                               if abs(d.residual_db) >= settings.unexplained_db and d.key not in explained]
+    attribution.unexplained = unexplained_of(attribution.candidates, comparison.disagreements, settings)
 
 
 def explains(attribution) -> bool:

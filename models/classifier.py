@@ -56,14 +56,6 @@ def represent_batch(data: SignalSet, spec: ModelSpec, sl: slice, crops: tuple[fl
     return x, torch.from_numpy(np.repeat(operating_features(part, spec.operating_inputs), len(crops), axis=0))
 
 
-def representation_batches(data: SignalSet, spec: ModelSpec, *, crops: tuple[float, ...], batch_size: int = 256):
-    """Yield ``(slice, tensor, side)`` for batches of ``batch_size`` records of ``data``
-    (:func:`represent_batch`)."""
-    for i0 in range(0, len(data), batch_size):
-        sl = slice(i0, min(i0 + batch_size, len(data)))
-        yield (sl, *represent_batch(data, spec, sl, crops))
-
-
 @dataclass
 class CNNClassifier:
     """A trained :class:`~models.cnn.GearCNN` and its :class:`~models.spec.ModelSpec`."""
@@ -102,9 +94,8 @@ class CNNClassifier:
             sev[sl] = out["severity"].numpy().reshape(b, k).sum(axis=1)
 
         slices = [slice(i0, min(i0 + per, n)) for i0 in range(0, n, per)]
-        # one torch thread per worker: the workers share nothing but the read-only network, so no OpenMP
-        # barrier waits (train.py: two OpenMP threads on a loaded machine were measured 25x slower than one)
-        torch.set_num_threads(1)
+        # one torch thread per worker (set in run): the workers share nothing but the read-only network, so no
+        # OpenMP barrier waits (train.py: two OpenMP threads on a loaded machine were measured 25x slower than one)
         if threads == 1 or len(slices) == 1:
             for sl in slices:
                 run(sl)
