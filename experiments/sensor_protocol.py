@@ -80,14 +80,18 @@ NO_SPEED = ("torque_nm", "signal_rms")
 #: ``tsa_lp_profile``: as ``tsa_lp_load``, with the pitted-teeth profile (models/tooth_profile.py: how many tooth
 #: pitches the TSA's deviation covers, after both shafts' first order is removed) as 12 more side inputs;
 #: ``tsa_te_profile``: ``tsa_te`` with the profile too (blind to encoder eccentricity; run as ablations
-#: ``tsa_te_profile*``, not in the protocol's own runs)
+#: ``tsa_te_profile*``, not in the protocol's own runs); ``tsa_te_diff``: ``tsa_te_profile`` with the RMS of the
+#: TSA's difference signal in metres as one more side input (``tsa_diff_rms``: the pit's deviation on an absolute
+#: scale, without the shafts' first orders; ablations ``tsa_te_diff*``)
 PROFILE = NO_SPEED + ("tooth_profile",)
 SENSOR_VARIANTS = {"tsa_op": VARIANTS_ALL["tsa_op"], "tsa_level": VARIANTS_ALL["tsa_level"],
                    "tsa_lp_load": (_tsa_lowpass(1.25), NO_SPEED),
                    "tsa_te": (replace(_tsa_lowpass(1.25), remove_shaft_1x=True), ("torque_nm", "signal_rms_no1x")),
                    "tsa_lp_profile": (_tsa_lowpass(1.25), PROFILE),
                    "tsa_te_profile": (replace(_tsa_lowpass(1.25), remove_shaft_1x=True),
-                                      ("torque_nm", "signal_rms_no1x", "tooth_profile"))}
+                                      ("torque_nm", "signal_rms_no1x", "tooth_profile")),
+                   "tsa_te_diff": (replace(_tsa_lowpass(1.25), remove_shaft_1x=True),
+                                   ("torque_nm", "signal_rms_no1x", "tsa_diff_rms", "tooth_profile"))}
 #: the variants each channel runs (the low-passed one is a transmission-error model: on the accelerometer the
 #: pit's quasi-static dip is not what the sensor sees)
 CHANNEL_VARIANTS = {"acc_pinion_loa_m_s2": ("tsa_op", "tsa_level"), "dte_m": VARIANTS}
@@ -295,7 +299,7 @@ ABLATIONS = {
 # removes them itself), on each split and training seed: "<name>[_load|_in_domain][_seedN]" (the speed split and
 # seed 0 carry no suffix)
 _PROFILE_MODELS = {name: {"representation": SENSOR_VARIANTS[name][0], "operating_inputs": SENSOR_VARIANTS[name][1]}
-                   for name in ("tsa_lp_profile", "tsa_te_profile")}
+                   for name in ("tsa_lp_profile", "tsa_te_profile", "tsa_te_diff")}
 ABLATIONS.update({name + ("" if split == "speed" else f"_{split}") + (f"_seed{seed}" if seed else ""):
                   (split, {**cfg, "seed": seed}, True, SECOND)
                   for name, cfg in _PROFILE_MODELS.items() for split in ("speed", "load", "in_domain")

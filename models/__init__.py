@@ -7,8 +7,9 @@
 - ``representations`` network inputs: raw segment, envelope spectrum, TSA, order and mesh-order spectra
 - ``input_checks``    whether records can be represented (speed, tooth counts, segment length, Nyquist)
 - ``order_filters``   the TSA's order low-pass, a zero-phase order high-pass, removal of both shafts' first order
+                      (and its closed form on a spectrum)
 - ``operating``       side inputs: known speed and load, the record's level (with or without the shaft lines),
-                      the pitted-teeth profile
+                      the level of the TSA's difference signal, the pitted-teeth profile
 - ``tooth_profile``   how many tooth pitches the TSA's deviation covers (pitted-teeth count, speed- and scale-free)
 - ``augment``         training-time augmentation (crop/phase, gain, noise, speed error, polarity)
 - ``cnn``             the multi-task 1-D CNN (severity class, severity fraction, pitted-teeth class)

@@ -10,7 +10,7 @@ records of their batch.
 from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import torch
@@ -19,7 +19,8 @@ from gearpit.errors import require
 from models.cnn import GearCNN
 from models.data import SignalSet
 from models.operating import n_operating, operating_features
-from models.representations import represent_crops
+from models.representations import represent_crops, represent_crops_and_difference
+from models.tooth_profile import PROFILE_SPEC, profile_of_difference
 from models.spec import ModelSpec, Predictions, check_input
 
 
@@ -44,16 +45,37 @@ def represent_batch(data: SignalSet, spec: ModelSpec, sl: slice, crops: tuple[fl
     """``(tensor, side)`` of the records ``sl`` of ``data``: the tensor holds the representation of each record
     at each start of ``crops``, ``(records * len(crops), channels, length)``, record by record (the crops of a
     record adjacent); ``side`` the side inputs (:mod:`models.operating`) repeated for every crop, or None.
-    Every value depends on its own record only, so batches can be computed in any order or in parallel."""
+    Every value depends on its own record only, so batches can be computed in any order or in parallel.
+
+    Where the model reads the pitted-teeth profile and its own representation is the profile's TSA (up to the
+    removal of the shaft lines), the profile is read from the first crop's FFT
+    (:func:`models.representations.represent_crops_and_difference`) instead of a second TSA of the record."""
     rep = spec.representation_spec()
     part = data.subset(np.arange(sl.start, sl.stop))
     fr, mc = part.shaft_hz(), part.mesh_cps()
-    x = represent_crops(part.signals, rep, fs_hz=part.fs_hz, crops=crops, shaft_hz=fr, mesh_cps=mc,
-                        z_pinion=part.pair.z_pinion or None, z_wheel=part.pair.z_wheel or None)
+    zp, zw = part.pair.z_pinion or None, part.pair.z_wheel or None
+    known = None
+    if _profile_shares_fft(spec, crops) and fr is not None and zp and zw:
+        x, diff = represent_crops_and_difference(part.signals, rep, fs_hz=part.fs_hz, crops=crops, shaft_hz=fr,
+                                                 z_pinion=zp, z_wheel=zw, difference_spec=PROFILE_SPEC)
+        known = {"tooth_profile": profile_of_difference(diff, int(zp))}
+    else:
+        x = represent_crops(part.signals, rep, fs_hz=part.fs_hz, crops=crops, shaft_hz=fr, mesh_cps=mc,
+                            z_pinion=zp, z_wheel=zw)
     x = torch.from_numpy(x.reshape(-1, *x.shape[2:]))
     if not spec.operating_inputs:
         return x, None
-    return x, torch.from_numpy(np.repeat(operating_features(part, spec.operating_inputs), len(crops), axis=0))
+    side = operating_features(part, spec.operating_inputs, known)
+    return x, torch.from_numpy(np.repeat(side, len(crops), axis=0))
+
+
+def _profile_shares_fft(spec: ModelSpec, crops: tuple[float, ...]) -> bool:
+    """Whether the profile side input can be read from the first crop's FFT (:func:`represent_batch`)."""
+    if not spec.operating_inputs or "tooth_profile" not in spec.operating_inputs.get("columns", ()):
+        return False
+    rep = spec.representation_spec()
+    return (rep.kind == "tsa" and rep.highpass_orders == 0 and crops[0] == 0.0
+            and replace(rep, remove_shaft_1x=True) == PROFILE_SPEC)
 
 
 @dataclass

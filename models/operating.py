@@ -33,6 +33,13 @@ the low-order content of a pit's dip. Measured on the default dataset's
 transmission error: both make a model blind to encoder eccentricity, and both
 cost severity accuracy (experiments/RESULTS.md, section "Sensor").
 
+``tsa_diff_rms`` is the RMS of the pinion's synchronous average's *difference signal* in the record's own
+unit, read as the pitted-teeth profile reads it (:data:`models.tooth_profile.PROFILE_SPEC`: low-passed below
+1.25 mesh orders, both shafts' first order removed from the record first): on a transmission error in metres,
+the size of the deviation that the teeth do not share (a pit's dip, the pitch errors' tooth-to-tooth scatter)
+without the mesh tone, the shafts' first orders (encoder eccentricity, run-out) or a housing path. On an
+accelerometer it is as bound to the sensor path as ``signal_rms``.
+
 ``tooth_profile`` is a group of 12 values taken as they are (not ``log10``): how many tooth pitches the
 deviation of the pinion's synchronous average covers (:mod:`models.tooth_profile`). It counts pitted teeth
 independently of the record's scale, sign and speed: on the transmission error's speed split a logistic
@@ -50,17 +57,18 @@ import numpy as np
 
 from gearpit.errors import require
 from models.order_filters import highpass, remove_shaft_lines
-from models.tooth_profile import N_FEATURES, tooth_profile
+from models.representations import tsa_difference
+from models.tooth_profile import N_FEATURES, PROFILE_SPEC, tooth_profile
 
 #: side inputs: label columns known at test time on a rig, and ``signal_rms``, the root-mean-square of
 #: the record in its own units (m/s^2 for the simulator), which makes the model depend on the sensor's
 #: calibration and on the transmission path (see the module docstring)
 OPERATING_COLUMNS: tuple[str, ...] = ("speed_rpm", "torque_nm", "signal_rms", "signal_rms_hp", "signal_rms_no1x",
-                                      "tooth_profile")
+                                      "tsa_diff_rms", "tooth_profile")
 #: side inputs that are a group of values taken as they are (not log10): name -> number of values
 GROUPS = {"tooth_profile": N_FEATURES}
 #: side inputs computed from the record that need its speed (the ``speed_rpm`` label)
-NEEDS_SPEED = ("signal_rms_hp", "signal_rms_no1x", "tooth_profile")
+NEEDS_SPEED = ("signal_rms_hp", "signal_rms_no1x", "tsa_diff_rms", "tooth_profile")
 #: cut-off of ``signal_rms_hp`` (pinion shaft orders): above the wheel's and the pinion's first order, below
 #: the lowest pinion order a tooth fault spreads to that matters (the difference signal starts at 3)
 HIGHPASS_ORDERS = 2.5
@@ -83,6 +91,14 @@ def _column(data, c: str) -> np.ndarray:
                 "removing both shafts' first order)")
         return tooth_profile(data.signals, fs_hz=data.fs_hz, shaft_hz=fr, z_pinion=int(data.pair.z_pinion),
                              z_wheel=int(data.pair.z_wheel))
+    if c == "tsa_diff_rms":
+        fr = data.shaft_hz()
+        require(fr is not None and data.pair.known, "speed_rpm / pair", None,
+                "the speed and both tooth counts (tsa_diff_rms reads the pinion's synchronous average after "
+                "removing both shafts' first order)")
+        d = tsa_difference(data.signals, PROFILE_SPEC, fs_hz=data.fs_hz, shaft_hz=fr,
+                           z_pinion=int(data.pair.z_pinion), z_wheel=int(data.pair.z_wheel))
+        return np.sqrt(np.mean(d ** 2, axis=1))
     if c == "signal_rms":
         x = np.asarray(data.signals, dtype=float)
         return np.sqrt(np.mean((x - x.mean(axis=1, keepdims=True)) ** 2, axis=1))
@@ -105,11 +121,12 @@ def _column(data, c: str) -> np.ndarray:
     return labels[c].to_numpy(dtype=float)
 
 
-def _values(data, cols: tuple[str, ...]) -> np.ndarray:
-    """``log10`` of each scalar side input, the values of each group (:data:`GROUPS`) as they are."""
+def _values(data, cols: tuple[str, ...], known: dict | None = None) -> np.ndarray:
+    """``log10`` of each scalar side input, the values of each group (:data:`GROUPS`) as they are; a column in
+    ``known`` (name -> values) is taken from there instead of computed."""
     parts = []
     for c in cols:
-        v = _column(data, c)
+        v = known[c] if known and c in known else _column(data, c)
         if c in GROUPS:
             require(bool(np.all(np.isfinite(v))), c, "non-finite values", "finite values for every record")
             parts.append(v.reshape(len(data), GROUPS[c]))
@@ -132,9 +149,10 @@ def fit_operating(data, columns) -> dict:
             "std": [float(s) if s > 0 else 1.0 for s in sd]}
 
 
-def operating_features(data, stats: dict) -> np.ndarray:
+def operating_features(data, stats: dict, known: dict | None = None) -> np.ndarray:
     """Side inputs ``(n_records, n_columns)`` float32 of the records ``data`` (a
-    :class:`~models.data.SignalSet`) with fitted ``stats``.
+    :class:`~models.data.SignalSet`) with fitted ``stats``; ``known``: columns already computed (name -> values,
+    e.g. the pitted-teeth profile read from the network's own TSA, :func:`models.classifier.represent_batch`).
 
     Examples
     --------
@@ -147,7 +165,7 @@ def operating_features(data, stats: dict) -> np.ndarray:
     if not stats:
         return np.zeros((len(data), 0), dtype=np.float32)
     cols = check_columns(stats["columns"])
-    v = _values(data, cols)
+    v = _values(data, cols, known)
     return ((v - np.asarray(stats["mean"])) / np.asarray(stats["std"])).astype(np.float32)
 
 

@@ -50,22 +50,84 @@ def _phasor(cycles_per_sample: float, n: int) -> np.ndarray:
     return (starts[:, None] * inner[None, :]).ravel()[:n]
 
 
+def _line_regressors(n: int, fs_hz: float, freqs_hz) -> np.ndarray:
+    """The regressors of :func:`remove_shaft_lines`: a constant, then the cosine and sine of each frequency."""
+    rows = [np.ones(n)]
+    for f in freqs_hz:
+        e = _phasor(f / fs_hz, n)
+        rows += [e.real, e.imag]
+    return np.stack(rows)
+
+
+def shaft_line_fit(x: np.ndarray, fs_hz: float, freqs_hz) -> np.ndarray:
+    """The least-squares coefficients of :func:`remove_shaft_lines`'s fit of ``x`` (1-D): a constant, then the
+    cosine and sine amplitude of each of ``freqs_hz`` (the regressors ``cos(2 pi f k / fs)``, ``sin(...)``).
+
+    Without forming the regressors: with the complex lines ``u_p = exp(2 pi i c_p k)``, ``c_p`` in ``0, +/-c_1,
+    +/-c_2, ...``, the real regressors are ``T u`` (``cos = (u_+ + u_-) / 2``, ``sin = (u_+ - u_-) / 2i``), their
+    Gram matrix ``T G T^H`` with ``G_pq = sum_k exp(2 pi i (c_p - c_q) k)`` in closed form, and the projections
+    ``T (u x)``, each ``u_p x`` a sum over blocks of the record (:func:`_phasor`'s factorisation). Equal to the
+    normal equations on the formed regressors to rounding (tested)."""
+    x = np.asarray(x, dtype=float)
+    n = x.size
+    c = np.array([0.0] + [s * f / fs_hz for f in freqs_hz for s in (1.0, -1.0)])
+    if n < 64 * c.size:                                  # too short for the normal equations to be safe
+        return _fit(x, _line_regressors(n, fs_hz, freqs_hz))
+    t = np.zeros((c.size, c.size), dtype=complex)
+    t[0, 0] = 1.0
+    for j in range(len(freqs_hz)):
+        p = 1 + 2 * j
+        t[p, p], t[p, p + 1] = 0.5, 0.5
+        t[p + 1, p], t[p + 1, p + 1] = -0.5j, 0.5j
+    theta = c[:, None] - c[None, :]
+    gram = (t @ geometric_sum(n, theta) @ t.conj().T).real
+    b = max(1, int(np.ceil(np.sqrt(n))))
+    nb = -(-n // b)
+    xb = np.zeros(nb * b)
+    xb[:n] = x
+    xb = xb.reshape(nb, b)
+    half = c[1::2]                                         # the positive frequencies; u_- x is the conjugate
+    inner = np.exp(2j * np.pi * half[None, :] * np.arange(b)[:, None])            # (b, k)
+    starts = np.exp(2j * np.pi * half[None, :] * np.arange(0, nb * b, b)[:, None])  # (nb, k)
+    z = np.einsum("bk,bk->k", xb @ inner, starts)
+    ux = np.empty(c.size, dtype=complex)
+    ux[0] = x.sum()
+    ux[1::2], ux[2::2] = z, z.conj()
+    return np.linalg.solve(gram, (t @ ux).real)
+
+
+def geometric_sum(n: int, theta: np.ndarray) -> np.ndarray:
+    """``sum_k exp(2 pi i theta k)`` over ``k = 0 .. n - 1`` (the Dirichlet kernel), elementwise."""
+    theta = np.asarray(theta, dtype=float)
+    den = np.sin(np.pi * theta)
+    small = np.abs(den) < 1e-300
+    ratio = np.where(small, float(n), np.sin(np.pi * n * theta) / np.where(small, 1.0, den))
+    return np.exp(1j * np.pi * (n - 1) * theta) * ratio
+
+
+def _fit(x: np.ndarray, a: np.ndarray) -> np.ndarray:
+    # normal equations (2 k + 1 unknowns): the regressors of lines a few cycles apart over the record are far from
+    # collinear, and the solve costs nothing beside the regressors (lstsq's SVD of the
+    # (N, 2 k + 1) matrix cost as much as building them)
+    if x.size < 64 * a.shape[0]:                         # too short for the normal equations to be safe
+        coef, *_ = np.linalg.lstsq(a.T, x, rcond=None)
+        return coef
+    return np.linalg.solve(a @ a.T, a @ x)
+
+
 def remove_shaft_lines(x: np.ndarray, fs_hz: float, freqs_hz) -> np.ndarray:
     """``x`` (1-D) less its least-squares fit by a constant and a sinusoid at each of ``freqs_hz`` (their
     amplitudes and phases free): removal of stationary lines at known frequencies with no edge effects; other
     content is left alone up to the regressors' overlap with it, ~1 / (pi df T) for a line df away in a record
     of T seconds (0.6 % for 2.9 Hz over 2 s)."""
-    n = x.size
-    rows = [np.ones(n)]
-    for f in freqs_hz:
-        e = _phasor(f / fs_hz, n)
-        rows += [e.real, e.imag]
-    a = np.stack(rows)
-    # normal equations (2 k + 1 unknowns): the regressors of lines a few cycles apart over the record are far from
-    # collinear, and the solve costs nothing beside the regressors (lstsq's SVD of the
-    # (N, 2 k + 1) matrix cost as much as building them)
-    if n < 64 * a.shape[0]:                              # too short for the normal equations to be safe
-        coef, *_ = np.linalg.lstsq(a.T, x, rcond=None)
-    else:
-        coef = np.linalg.solve(a @ a.T, a @ x)
-    return x - coef @ a
+    a = _line_regressors(x.size, fs_hz, freqs_hz)
+    return x - _fit(x, a) @ a
+
+
+def line_dft(n: int, cycles_per_sample: float, bins: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The DFT ``X[m] = sum_k x[k] exp(-2 pi i m k / n)`` over ``k = 0 .. n - 1`` of ``cos(2 pi c k)`` and of
+    ``sin(2 pi c k)`` (``c = cycles_per_sample``) at integer bins ``bins``, in closed form (the Dirichlet kernel):
+    what the FFT of a sampled line gives, without sampling it."""
+    m = np.asarray(bins, dtype=float)
+    plus, minus = geometric_sum(n, cycles_per_sample - m / n), geometric_sum(n, -cycles_per_sample - m / n)
+    return 0.5 * (plus + minus), (plus - minus) / 2j

@@ -70,7 +70,7 @@ References
 """
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, fields, replace
 from typing import Literal
 
 import numpy as np
@@ -78,7 +78,7 @@ from scipy.signal import resample
 
 from gearpit.errors import InputError, require, require_positive
 from models.input_checks import check_inputs
-from models.order_filters import highpass, lowpass_gain, remove_shaft_lines
+from models.order_filters import geometric_sum, highpass, lowpass_gain, remove_shaft_lines, shaft_line_fit
 
 Kind = Literal["raw", "envelope", "tsa", "order", "mesh_order"]
 KINDS: tuple[str, ...] = ("raw", "envelope", "tsa", "order", "mesh_order")
@@ -263,6 +263,138 @@ def _mean_amplitudes(x: np.ndarray, n_seg: int, crop_starts: list[list[int]], en
     return out
 
 
+def _tsa_segment(size: int, spec: RepresentationSpec, fs_hz: float, fr: float) -> tuple[int, np.ndarray]:
+    """Samples in the TSA's segment of a record of ``size`` samples (as many whole revolutions as the record
+    holds, less one for the start phase, at least ``n_revs``), and where integer shaft orders 0 ..
+    ``samples_per_rev // 2`` fall among its FFT bins (fractional bins)."""
+    rev = fs_hz / fr
+    n_rev = max(spec.n_revs, int(np.floor(size / rev)) - 1)
+    n_seg = min(int(round(n_rev * rev)), size)
+    # bin j of the segment is shaft order j / (revolutions it holds): keep the integer orders
+    return n_seg, np.arange(spec.samples_per_rev // 2 + 1) * (n_seg / rev)
+
+
+def _tsa_comb(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, fr: float, starts, z_pinion: int,
+              z_wheel: int = 0) -> np.ndarray:
+    """The TSA comb of record ``x`` (pinion at ``fr`` Hz) for each start of ``starts``: the spectrum of the
+    segment of whole revolutions at integer shaft orders 0 .. ``samples_per_rev // 2``, filtered as ``spec``
+    says (high-pass, shaft lines removed, low-pass): ``(len(starts), samples_per_rev // 2 + 1)`` complex."""
+    if spec.highpass_orders > 0:
+        x = highpass(x, fs_hz, fr, spec.highpass_orders)
+    if spec.remove_shaft_1x:
+        x = remove_shaft_lines(x, fs_hz, (fr, fr * z_pinion / z_wheel))
+    n_seg, bins = _tsa_segment(x.size, spec, fs_hz, fr)
+    i0s = [_starts(x.size, n_seg, st, False)[0] for st in starts]
+    spec_c = np.fft.rfft(np.stack([x[i0:i0 + n_seg] for i0 in i0s]), axis=-1)  # one FFT plan for all crops
+    idx = np.arange(spec_c.shape[1])
+    comb = np.stack([np.interp(bins, idx, c.real, right=0.0) + 1j * np.interp(bins, idx, c.imag, right=0.0)
+                     for c in spec_c])
+    if spec.lowpass_mesh_orders > 0:
+        comb = comb * lowpass_gain(comb.shape[1], z_pinion, spec.lowpass_mesh_orders)
+    return comb
+
+
+def _lines_comb(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, fr: float, z_pinion: int,
+                z_wheel: int) -> np.ndarray:
+    """The TSA comb (start 0, filtered as ``spec``) of the two shaft lines that
+    :func:`~models.order_filters.remove_shaft_lines` fits to ``x`` (a constant, the pinion's and the wheel's
+    first order), in closed form: the comb of ``remove_shaft_lines(x)`` is the comb of ``x`` less this one, by
+    linearity, without a second FFT of the record."""
+    freqs = (fr, fr * z_pinion / z_wheel)
+    coef = shaft_line_fit(x, fs_hz, freqs)
+    n_seg, bins = _tsa_segment(x.size, spec, fs_hz, fr)
+    m0 = np.floor(bins).astype(int)
+    w = bins - m0
+    # a cos + b sin = (a - i b) / 2 exp(+) + (a + i b) / 2 exp(-): the DFT of each complex line at bins m0 and
+    # m0 + 1 (one closed-form evaluation for all four), weighted
+    c = np.array([s * f / fs_hz for f in freqs for s in (1.0, -1.0)])
+    half = (coef[1::2] - 1j * coef[2::2]) / 2
+    weights = np.stack([half, half.conj()], axis=1).ravel()
+    m = np.stack([m0, m0 + 1]).astype(float)
+    dft = (weights[:, None, None] * geometric_sum(n_seg, c[:, None, None] - m[None] / n_seg)).sum(axis=0)
+    dft[0] += coef[0] * np.where(m0 == 0, float(n_seg), 0.0)
+    top = n_seg // 2                                      # np.interp's right=0 beyond the last rfft bin
+    comb = np.where(m0 < top, (1.0 - w) * dft[0] + w * np.where(m0 + 1 <= top, dft[1], 0.0),
+                    np.where(m0 == top, dft[0], 0.0))
+    if spec.lowpass_mesh_orders > 0:
+        comb = comb * lowpass_gain(comb.size, z_pinion, spec.lowpass_mesh_orders)
+    return comb
+
+
+def _tsa_channels(comb: np.ndarray, samples_per_rev: int, z_pinion: int) -> tuple[np.ndarray, np.ndarray]:
+    """The synchronous average and its difference signal (the module docstring), one revolution each."""
+    avg = np.fft.irfft(comb, n=samples_per_rev, axis=-1)
+    diff = np.fft.irfft(comb * _difference_mask(comb.shape[1], z_pinion), n=samples_per_rev, axis=-1)
+    return avg, diff
+
+
+def _tsa_normalised(comb: np.ndarray, samples_per_rev: int, z_pinion: int) -> tuple[np.ndarray, np.ndarray]:
+    """The ``tsa`` representation of each crop's comb, ``(n_crops, 2, samples_per_rev)``, and the difference
+    signals before their scaling."""
+    avg, diff = _tsa_channels(comb, samples_per_rev, z_pinion)
+    # both scaled by the TSA's standard deviation: the difference keeps its level relative to the mesh tone
+    sd = avg.std(axis=-1, keepdims=True)
+    sd = np.where(sd > 0, sd, 1.0)
+    return np.stack([(avg - avg.mean(axis=-1, keepdims=True)) / sd,
+                     (diff - diff.mean(axis=-1, keepdims=True)) / sd], axis=1), diff
+
+
+def tsa_difference(signals: np.ndarray, spec: RepresentationSpec, *, fs_hz: float, shaft_hz, z_pinion: int,
+                   z_wheel: int | None = None) -> np.ndarray:
+    """The TSA difference signal of every record in the record's own unit (not normalised), from the segment
+    that starts at the record's start: ``(n_records, samples_per_rev)``. ``spec`` must be a ``tsa`` spec; its
+    filters apply (``remove_shaft_1x`` needs ``z_wheel``). Up to the per-record scale, channel 1 of
+    ``represent(..., starts=0.0)``."""
+    x = np.asarray(signals, dtype=float)
+    require(spec.kind == "tsa", "representation.kind", spec.kind, "'tsa' (the difference signal is the TSA's)")
+    require(x.ndim == 2 and x.shape[0] >= 1, "signals", x.shape, "a 2-D array (records, samples)")
+    fr = _per_record(shaft_hz, x.shape[0], "shaft_hz")
+    check_inputs(spec, x.shape[1], fs_hz, fr, None, z_pinion=z_pinion, max_speed_factor=1.0, z_wheel=z_wheel)
+    zw = int(z_wheel) if z_wheel else 0
+    return np.stack([_tsa_channels(_tsa_comb(row - row.mean(), spec, float(fs_hz), float(f), (0.0,), int(z_pinion),
+                                             zw), spec.samples_per_rev, int(z_pinion))[1][0]
+                     for row, f in zip(x, fr)])
+
+
+def represent_crops_and_difference(signals: np.ndarray, spec: RepresentationSpec, *, fs_hz: float, crops,
+                                   shaft_hz, z_pinion: int, z_wheel: int,
+                                   difference_spec: RepresentationSpec) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`represent_crops` of a ``tsa`` ``spec`` and, from the same FFT, the difference signal of every record
+    under ``difference_spec`` at start 0 (as :func:`tsa_difference` of the normalised record): ``(rep, diff)``,
+    ``diff`` of shape ``(n_records, samples_per_rev)``.
+
+    ``difference_spec`` may differ from ``spec`` only in ``remove_shaft_1x`` (True), and ``crops[0]`` must be 0:
+    the two shaft lines are then taken off the first crop's comb in closed form
+    (:func:`models.order_filters.line_dft`) instead of the record being filtered and transformed again. Equal to
+    the direct computation to rounding (tested). Used for the pitted-teeth profile side input at prediction.
+    """
+    x = np.asarray(signals)
+    require(x.ndim == 2 and x.shape[0] >= 1, "signals", x.shape, "a 2-D array (records, samples)")
+    require(spec.kind == "tsa" and spec.highpass_orders == 0 and replace(spec, remove_shaft_1x=True)
+            == replace(difference_spec, remove_shaft_1x=True) and difference_spec.remove_shaft_1x,
+            "difference_spec", difference_spec.to_dict(), f"{spec.to_dict()} with remove_shaft_1x = true")
+    st = tuple(float(v) for v in crops)
+    require(len(st) >= 1 and st[0] == 0.0, "crops", list(st), "starts whose first is 0")
+    n = x.shape[0]
+    fr = _per_record(shaft_hz, n, "shaft_hz")
+    check_inputs(spec, x.shape[1], fs_hz, fr, None, z_pinion=z_pinion, z_wheel=z_wheel)
+    check_inputs(difference_spec, x.shape[1], fs_hz, fr, None, z_pinion=z_pinion, z_wheel=z_wheel)
+    rep = np.empty((n, len(st), spec.n_channels, spec.length), dtype=np.float32)
+    diff = np.empty((n, spec.samples_per_rev))
+    zp, zw, spr = int(z_pinion), int(z_wheel), spec.samples_per_rev
+    mask = _difference_mask(spr // 2 + 1, zp)
+    for i in range(n):
+        xi = _normalise(x[i].astype(float))
+        comb = _tsa_comb(xi, spec, float(fs_hz), float(fr[i]), st, zp, zw)
+        rep[i], d = _tsa_normalised(comb, spr, zp)
+        if spec.remove_shaft_1x:
+            diff[i] = d[0]
+        else:
+            first = comb[0] - _lines_comb(xi, spec, float(fs_hz), float(fr[i]), zp, zw)
+            diff[i] = np.fft.irfft(first * mask, n=spr)
+    return rep, diff
+
+
 def _crops(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, shaft_hz: float | None, mesh_cps: float | None,
            starts: tuple[float, ...], speed_factor: float, z_pinion: int, z_wheel: int = 0) -> np.ndarray:
     """Representation of one record at every start of ``starts``: ``(len(starts), n_channels, length)``.
@@ -286,31 +418,8 @@ def _crops(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, shaft_hz: floa
         amp = _mean_amplitudes(x, spec.n_samples, [_starts(x.size, spec.n_samples, st, True) for st in starts], True)
         return np.stack([_standardise(np.log10(a[:spec.length] + LOG_FLOOR))[None, :] for a in amp])
     if k == "tsa":
-        if spec.highpass_orders > 0:
-            x = highpass(x, fs_hz, shaft_hz * speed_factor, spec.highpass_orders)
-        if spec.remove_shaft_1x:
-            fr = shaft_hz * speed_factor
-            x = remove_shaft_lines(x, fs_hz, (fr, fr * z_pinion / z_wheel))
-        # as many whole revolutions as the record holds, less one (room for the start phase), >= n_revs
-        rev = fs_hz / (shaft_hz * speed_factor)
-        n_rev = max(spec.n_revs, int(np.floor(x.size / rev)) - 1)
-        n_seg = min(int(round(n_rev * rev)), x.size)
-        i0s = [_starts(x.size, n_seg, st, False)[0] for st in starts]
-        spec_c = np.fft.rfft(np.stack([x[i0:i0 + n_seg] for i0 in i0s]), axis=-1)  # one FFT plan for all crops
-        # bin j of the segment is shaft order j / (revolutions it holds): keep the integer orders
-        bins = np.arange(spec.samples_per_rev // 2 + 1) * (n_seg / rev)
-        idx = np.arange(spec_c.shape[1])
-        comb = np.stack([np.interp(bins, idx, c.real, right=0.0) + 1j * np.interp(bins, idx, c.imag, right=0.0)
-                         for c in spec_c])
-        if spec.lowpass_mesh_orders > 0:
-            comb = comb * lowpass_gain(comb.shape[1], z_pinion, spec.lowpass_mesh_orders)
-        avg = np.fft.irfft(comb, n=spec.samples_per_rev, axis=-1)
-        diff = np.fft.irfft(comb * _difference_mask(comb.shape[1], z_pinion), n=spec.samples_per_rev, axis=-1)
-        # both scaled by the TSA's standard deviation: the difference keeps its level relative to the mesh tone
-        sd = avg.std(axis=-1, keepdims=True)
-        sd = np.where(sd > 0, sd, 1.0)
-        return np.stack([(avg - avg.mean(axis=-1, keepdims=True)) / sd,
-                         (diff - diff.mean(axis=-1, keepdims=True)) / sd], axis=1)
+        comb = _tsa_comb(x, spec, fs_hz, shaft_hz * speed_factor, starts, z_pinion, z_wheel)
+        return _tsa_normalised(comb, spec.samples_per_rev, z_pinion)[0]
     if k == "order":
         # bin j of the segment is shaft order j * (revolutions in the segment)^-1
         unit = 1.0 / (n_seg * (shaft_hz * speed_factor) / fs_hz)

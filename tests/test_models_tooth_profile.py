@@ -140,3 +140,99 @@ def test_profile_ignores_the_shaft_encoders_disc_eccentricity(simulated_te):
     dirty = tooth_profile(x + ecc, fs_hz=12800.0, shaft_hz=rpm / 60.0, z_pinion=z, z_wheel=100)
     np.testing.assert_array_equal((dirty[:, 5:11] > 0.5).sum(axis=1), count)
     np.testing.assert_allclose(dirty, clean, atol=0.05)
+
+
+def test_profile_from_the_networks_fft_equals_a_second_tsa(simulated_te):
+    """represent_crops_and_difference reads the profile's difference signal from the first crop's FFT, the two
+    shaft lines taken off in closed form (models/order_filters.py::line_dft, shaft_line_fit), instead of a second
+    TSA of the filtered record. Reference: the direct computation (tsa_difference of the normalised record);
+    tolerance 1e-12 of its largest value (rounding), with encoder eccentricity of 20 um on both shafts (~20 times
+    the pit's deviation, so a wrong line correction would show). The network's crops are bitwise those of
+    represent_crops."""
+    from dataclasses import replace
+
+    from models.representations import (_normalise, represent_crops, represent_crops_and_difference,
+                                        tsa_difference)
+    from models.tooth_profile import PROFILE_SPEC
+
+    x, rpm, count, z = simulated_te
+    t = np.arange(x.shape[1]) / 12800.0
+    fr = rpm / 60.0
+    x = x + 20e-6 * np.sin(2 * np.pi * fr[:, None] * t + 0.3) + 20e-6 * np.sin(2 * np.pi * fr[:, None] * z / 100 * t)
+    ref = np.stack([tsa_difference(_normalise(r)[None], PROFILE_SPEC, fs_hz=12800.0, shaft_hz=f, z_pinion=z,
+                                   z_wheel=100)[0] for r, f in zip(x, fr)])
+    for spec in (replace(PROFILE_SPEC, remove_shaft_1x=False), PROFILE_SPEC):   # tsa_lp_profile, tsa_te_profile
+        rep, diff = represent_crops_and_difference(x, spec, fs_hz=12800.0, crops=(0.0, 0.5, 1.0), shaft_hz=fr,
+                                                   z_pinion=z, z_wheel=100, difference_spec=PROFILE_SPEC)
+        assert np.abs(diff - ref).max() < 1e-12 * np.abs(ref).max()
+        np.testing.assert_array_equal(rep, represent_crops(x, spec, fs_hz=12800.0, crops=(0.0, 0.5, 1.0),
+                                                           shaft_hz=fr, z_pinion=z, z_wheel=100))
+        np.testing.assert_allclose(profile_of_difference(diff, z), tooth_profile(x, fs_hz=12800.0, shaft_hz=fr,
+                                   z_pinion=z, z_wheel=100), atol=1e-6)
+    with pytest.raises(InputError, match="crops"):
+        represent_crops_and_difference(x, PROFILE_SPEC, fs_hz=12800.0, crops=(0.5,), shaft_hz=fr, z_pinion=z,
+                                       z_wheel=100, difference_spec=PROFILE_SPEC)
+    with pytest.raises(InputError, match="difference_spec"):
+        represent_crops_and_difference(x, replace(PROFILE_SPEC, n_revs=4), fs_hz=12800.0, crops=(0.0,),
+                                       shaft_hz=fr, z_pinion=z, z_wheel=100, difference_spec=PROFILE_SPEC)
+
+
+def test_closed_form_line_fit_and_dft_equal_the_sampled_ones():
+    """shaft_line_fit (Gram matrix and projections without forming the regressors) equals the normal equations on
+    the formed regressors, and line_dft equals the FFT of the sampled lines, to rounding (1e-12 relative), at a
+    frequency on a bin and one off the bins."""
+    from models.order_filters import _fit, _line_regressors, line_dft, shaft_line_fit
+
+    rng = np.random.default_rng(1)
+    n, fs = 12811, 12800.0
+    k = np.arange(n)
+    freqs = (16.9, 16.9 * 29 / 100)
+    x = rng.normal(size=n) + 3 * np.cos(2 * np.pi * freqs[0] / fs * k + 0.4) + np.sin(2 * np.pi * freqs[1] / fs * k)
+    ref = _fit(x, _line_regressors(n, fs, freqs))
+    np.testing.assert_allclose(shaft_line_fit(x, fs, freqs), ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+    m = np.arange(0, 300)
+    for c in (37 / n, 0.0123457):
+        cos, sin = line_dft(n, c, m)
+        np.testing.assert_allclose(cos, np.fft.rfft(np.cos(2 * np.pi * c * k))[m], atol=1e-12 * n)
+        np.testing.assert_allclose(sin, np.fft.rfft(np.sin(2 * np.pi * c * k))[m], atol=1e-12 * n)
+
+
+def test_prediction_reads_the_same_profile_as_training(simulated_te):
+    """The side inputs at prediction (profile from the network's FFT, models/classifier.py::represent_batch) equal
+    those computed as in training (operating_features, a second TSA) to float32 rounding, for a model whose
+    representation is the profile's TSA without the shaft-line removal (tsa_lp_profile)."""
+    from dataclasses import replace
+
+    from models.classifier import _profile_shares_fft, represent_batch
+    from models.tooth_profile import PROFILE_SPEC
+    from models.train import TrainConfig, train_cnn
+
+    x, rpm, count, z = simulated_te
+    data = _set(np.repeat(x, 2, axis=0), np.repeat(rpm, 2), z, np.repeat(count, 2))
+    cfg = TrainConfig(representation=replace(PROFILE_SPEC, remove_shaft_1x=False), max_epochs=1, patience=1,
+                      batch_size=8, widths=(8, 8, 8, 8, 8), hidden=8, seed=0,
+                      operating_inputs=("torque_nm", "signal_rms", "tooth_profile"))
+    model = train_cnn(data, cfg)
+    crops = (0.0, 0.5, 1.0)
+    assert _profile_shares_fft(model.spec, crops) and not _profile_shares_fft(model.spec, (0.5,))
+    _, side = represent_batch(data, model.spec, slice(0, len(data)), crops)
+    direct = np.repeat(operating_features(data, model.spec.operating_inputs), 3, axis=0)
+    np.testing.assert_allclose(side.numpy(), direct, atol=1e-5)
+
+
+def test_difference_rms_is_blind_to_the_encoders_and_scales_with_the_record(simulated_te):
+    """tsa_diff_rms (models/operating.py): the RMS of the profile's difference signal in the record's unit. The
+    shaft lines of eccentric encoders (20 um on each shaft) move it by less than 1 % (they are removed before the
+    average); it is proportional to the record (x 7.3 -> x 7.3 to 1e-9); three pitted teeth give a larger value
+    than one at the same speed (the spur paper: each pitted tooth adds its own deviation)."""
+    from models.operating import _column
+
+    x, rpm, count, z = simulated_te
+    t = np.arange(x.shape[1]) / 12800.0
+    fr = (rpm / 60.0)[:, None]
+    ecc = 20e-6 * np.sin(2 * np.pi * fr * t + 0.3) + 20e-6 * np.sin(2 * np.pi * fr * z / 100 * t + 1.1)
+    clean = _column(_set(x, rpm, z), "tsa_diff_rms")
+    np.testing.assert_allclose(_column(_set(x + ecc, rpm, z), "tsa_diff_rms"), clean, rtol=0.01)
+    np.testing.assert_allclose(_column(_set(7.3 * x, rpm, z), "tsa_diff_rms"), 7.3 * clean, rtol=1e-9)
+    for speed in np.unique(rpm):
+        assert clean[(rpm == speed) & (count == 3)][0] > 1.5 * clean[(rpm == speed) & (count == 1)][0]
