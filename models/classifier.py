@@ -47,8 +47,9 @@ def represent_batch(data: SignalSet, spec: ModelSpec, sl: slice, crops: tuple[fl
     record adjacent); ``side`` the side inputs (:mod:`models.operating`) repeated for every crop, or None.
     Every value depends on its own record only, so batches can be computed in any order or in parallel.
 
-    Where the model reads the pitted-teeth profile and its own representation is the profile's TSA (up to the
-    removal of the shaft lines), the profile is read from the first crop's FFT
+    Where the model reads the pitted-teeth profile or the level of its difference signal (``tsa_diff_rms``) and
+    its own representation is the profile's TSA (up to the removal of the shaft lines), they are read from the
+    first crop's FFT
     (:func:`models.representations.represent_crops_and_difference`) instead of a second TSA of the record."""
     rep = spec.representation_spec()
     part = data.subset(np.arange(sl.start, sl.stop))
@@ -58,7 +59,10 @@ def represent_batch(data: SignalSet, spec: ModelSpec, sl: slice, crops: tuple[fl
     if _profile_shares_fft(spec, crops) and fr is not None and zp and zw:
         x, diff = represent_crops_and_difference(part.signals, rep, fs_hz=part.fs_hz, crops=crops, shaft_hz=fr,
                                                  z_pinion=zp, z_wheel=zw, difference_spec=PROFILE_SPEC)
-        known = {"tooth_profile": profile_of_difference(diff, int(zp))}
+        # the difference signal is that of the normalised record: its RMS times the record's standard deviation is
+        # tsa_diff_rms (the difference holds no order 0, so the record's mean does not enter)
+        known = {"tooth_profile": profile_of_difference(diff, int(zp)),
+                 "tsa_diff_rms": np.sqrt(np.mean(diff ** 2, axis=1)) * np.asarray(part.signals, float).std(axis=1)}
     else:
         x = represent_crops(part.signals, rep, fs_hz=part.fs_hz, crops=crops, shaft_hz=fr, mesh_cps=mc,
                             z_pinion=zp, z_wheel=zw)
@@ -70,8 +74,8 @@ def represent_batch(data: SignalSet, spec: ModelSpec, sl: slice, crops: tuple[fl
 
 
 def _profile_shares_fft(spec: ModelSpec, crops: tuple[float, ...]) -> bool:
-    """Whether the profile side input can be read from the first crop's FFT (:func:`represent_batch`)."""
-    if not spec.operating_inputs or "tooth_profile" not in spec.operating_inputs.get("columns", ()):
+    """Whether the profile side inputs can be read from the first crop's FFT (:func:`represent_batch`)."""
+    if not spec.operating_inputs or not {"tooth_profile", "tsa_diff_rms"} & set(spec.operating_inputs["columns"]):
         return False
     rep = spec.representation_spec()
     return (rep.kind == "tsa" and rep.highpass_orders == 0 and crops[0] == 0.0

@@ -56,7 +56,7 @@ from __future__ import annotations
 import numpy as np
 
 from gearpit.errors import require
-from models.order_filters import highpass, remove_shaft_lines
+from models.order_filters import highpass, rms_without_lines
 from models.representations import tsa_difference
 from models.tooth_profile import N_FEATURES, PROFILE_SPEC, tooth_profile
 
@@ -114,8 +114,7 @@ def _column(data, c: str) -> np.ndarray:
                 "the speed and both tooth counts (signal_rms_no1x removes both shafts' first order)")
         ratio = data.pair.z_pinion / data.pair.z_wheel
         x = np.asarray(data.signals, dtype=float)
-        return np.array([np.sqrt(np.mean(remove_shaft_lines(x[i], data.fs_hz, (fr[i], fr[i] * ratio)) ** 2))
-                         for i in range(len(x))])
+        return np.array([rms_without_lines(x[i], data.fs_hz, (fr[i], fr[i] * ratio)) for i in range(len(x))])
     labels = data.labels
     require(c in labels, "labels", list(labels.columns), f"a {c} column (the model takes it as a side input)")
     return labels[c].to_numpy(dtype=float)

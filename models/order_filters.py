@@ -68,11 +68,25 @@ def shaft_line_fit(x: np.ndarray, fs_hz: float, freqs_hz) -> np.ndarray:
     Gram matrix ``T G T^H`` with ``G_pq = sum_k exp(2 pi i (c_p - c_q) k)`` in closed form, and the projections
     ``T (u x)``, each ``u_p x`` a sum over blocks of the record (:func:`_phasor`'s factorisation). Equal to the
     normal equations on the formed regressors to rounding (tested)."""
+    return _line_fit(x, fs_hz, freqs_hz)[0]
+
+
+def rms_without_lines(x: np.ndarray, fs_hz: float, freqs_hz) -> float:
+    """The RMS of :func:`remove_shaft_lines` of ``x`` (1-D) without forming it: a least-squares residual is
+    orthogonal to the regressors, so its energy is ``x.x - coef . (A x)``."""
+    x = np.asarray(x, dtype=float)
+    coef, ax = _line_fit(x, fs_hz, freqs_hz)
+    return float(np.sqrt(max(float(x @ x - coef @ ax), 0.0) / x.size))
+
+
+def _line_fit(x: np.ndarray, fs_hz: float, freqs_hz) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`shaft_line_fit`'s coefficients and the projections ``A x`` of ``x`` on the real regressors."""
     x = np.asarray(x, dtype=float)
     n = x.size
     c = np.array([0.0] + [s * f / fs_hz for f in freqs_hz for s in (1.0, -1.0)])
     if n < 64 * c.size:                                  # too short for the normal equations to be safe
-        return _fit(x, _line_regressors(n, fs_hz, freqs_hz))
+        a = _line_regressors(n, fs_hz, freqs_hz)
+        return _fit(x, a), a @ x
     t = np.zeros((c.size, c.size), dtype=complex)
     t[0, 0] = 1.0
     for j in range(len(freqs_hz)):
@@ -93,7 +107,8 @@ def shaft_line_fit(x: np.ndarray, fs_hz: float, freqs_hz) -> np.ndarray:
     ux = np.empty(c.size, dtype=complex)
     ux[0] = x.sum()
     ux[1::2], ux[2::2] = z, z.conj()
-    return np.linalg.solve(gram, (t @ ux).real)
+    ax = (t @ ux).real
+    return np.linalg.solve(gram, ax), ax
 
 
 def geometric_sum(n: int, theta: np.ndarray) -> np.ndarray:

@@ -179,9 +179,10 @@ def test_profile_from_the_networks_fft_equals_a_second_tsa(simulated_te):
 
 def test_closed_form_line_fit_and_dft_equal_the_sampled_ones():
     """shaft_line_fit (Gram matrix and projections without forming the regressors) equals the normal equations on
-    the formed regressors, and line_dft equals the FFT of the sampled lines, to rounding (1e-12 relative), at a
+    the formed regressors, rms_without_lines the RMS of the filtered record, and line_dft equals the FFT of the sampled lines, to rounding (1e-12 relative), at a
     frequency on a bin and one off the bins."""
-    from models.order_filters import _fit, _line_regressors, line_dft, shaft_line_fit
+    from models.order_filters import (_fit, _line_regressors, line_dft, remove_shaft_lines, rms_without_lines,
+                                      shaft_line_fit)
 
     rng = np.random.default_rng(1)
     n, fs = 12811, 12800.0
@@ -190,6 +191,8 @@ def test_closed_form_line_fit_and_dft_equal_the_sampled_ones():
     x = rng.normal(size=n) + 3 * np.cos(2 * np.pi * freqs[0] / fs * k + 0.4) + np.sin(2 * np.pi * freqs[1] / fs * k)
     ref = _fit(x, _line_regressors(n, fs, freqs))
     np.testing.assert_allclose(shaft_line_fit(x, fs, freqs), ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+    direct = np.sqrt(np.mean(remove_shaft_lines(x, fs, freqs) ** 2))
+    assert rms_without_lines(x, fs, freqs) == pytest.approx(direct, rel=1e-12) and 0.9 < direct < 1.1  # the noise
     m = np.arange(0, 300)
     for c in (37 / n, 0.0123457):
         cos, sin = line_dft(n, c, m)
@@ -200,7 +203,8 @@ def test_closed_form_line_fit_and_dft_equal_the_sampled_ones():
 def test_prediction_reads_the_same_profile_as_training(simulated_te):
     """The side inputs at prediction (profile from the network's FFT, models/classifier.py::represent_batch) equal
     those computed as in training (operating_features, a second TSA) to float32 rounding, for a model whose
-    representation is the profile's TSA without the shaft-line removal (tsa_lp_profile)."""
+    representation is the profile's TSA without the shaft-line removal (tsa_lp_profile) and one with it that also
+    reads the difference signal's level (tsa_te_diff)."""
     from dataclasses import replace
 
     from models.classifier import _profile_shares_fft, represent_batch
@@ -209,15 +213,16 @@ def test_prediction_reads_the_same_profile_as_training(simulated_te):
 
     x, rpm, count, z = simulated_te
     data = _set(np.repeat(x, 2, axis=0), np.repeat(rpm, 2), z, np.repeat(count, 2))
-    cfg = TrainConfig(representation=replace(PROFILE_SPEC, remove_shaft_1x=False), max_epochs=1, patience=1,
-                      batch_size=8, widths=(8, 8, 8, 8, 8), hidden=8, seed=0,
-                      operating_inputs=("torque_nm", "signal_rms", "tooth_profile"))
-    model = train_cnn(data, cfg)
-    crops = (0.0, 0.5, 1.0)
-    assert _profile_shares_fft(model.spec, crops) and not _profile_shares_fft(model.spec, (0.5,))
-    _, side = represent_batch(data, model.spec, slice(0, len(data)), crops)
-    direct = np.repeat(operating_features(data, model.spec.operating_inputs), 3, axis=0)
-    np.testing.assert_allclose(side.numpy(), direct, atol=1e-5)
+    for remove, side_inputs in ((False, ("torque_nm", "signal_rms", "tooth_profile")),              # tsa_lp_profile
+                                (True, ("torque_nm", "signal_rms_no1x", "tsa_diff_rms", "tooth_profile"))):  # tsa_te_diff
+        cfg = TrainConfig(representation=replace(PROFILE_SPEC, remove_shaft_1x=remove), max_epochs=1, patience=1,
+                          batch_size=8, widths=(8, 8, 8, 8, 8), hidden=8, seed=0, operating_inputs=side_inputs)
+        model = train_cnn(data, cfg)
+        crops = (0.0, 0.5, 1.0)
+        assert _profile_shares_fft(model.spec, crops) and not _profile_shares_fft(model.spec, (0.5,))
+        _, side = represent_batch(data, model.spec, slice(0, len(data)), crops)
+        direct = np.repeat(operating_features(data, model.spec.operating_inputs), 3, axis=0)
+        np.testing.assert_allclose(side.numpy(), direct, atol=1e-5)
 
 
 def test_difference_rms_is_blind_to_the_encoders_and_scales_with_the_record(simulated_te):
