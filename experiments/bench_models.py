@@ -66,7 +66,8 @@ def main(argv=None) -> int:
 
     # reference: the representation alone, once over the training records
     t0 = time.perf_counter()
-    represent(data.signals, rep, fs_hz=data.fs_hz, shaft_hz=data.shaft_hz(), z_pinion=data.pair.z_pinion, starts=0.5)
+    represent(data.signals, rep, fs_hz=data.fs_hz, shaft_hz=data.shaft_hz(), z_pinion=data.pair.z_pinion,
+              z_wheel=data.pair.z_wheel, starts=0.5)
     t_rep = time.perf_counter() - t0
 
     cfg = TrainConfig(representation=rep, seed=0, threads=args.threads, operating_inputs=side)
@@ -90,7 +91,8 @@ def main(argv=None) -> int:
             model.predict(batch, n_crops=crops, threads=workers)
             rates[workers, crops] = n / (time.perf_counter() - t0)
     t0 = time.perf_counter()
-    represent(batch.signals, rep, fs_hz=batch.fs_hz, shaft_hz=batch.shaft_hz(), z_pinion=batch.pair.z_pinion, starts=0.5)
+    represent(batch.signals, rep, fs_hz=batch.fs_hz, shaft_hz=batch.shaft_hz(), z_pinion=batch.pair.z_pinion,
+              z_wheel=batch.pair.z_wheel, starts=0.5)
     ref_rate = n / (time.perf_counter() - t0)
     for workers in (1, 2):
         print(f"inference, {workers} worker thread{'s' if workers > 1 else ''}: {rates[workers, 1]:.0f} signals/s "

@@ -159,7 +159,7 @@ def test_unknown_rate_csv_records_and_labels(tmp_path):
     assert d.as_binary().labels["severity_class"].tolist() == ["damaged"] * 2 + ["healthy"] * 2
 
 
-@pytest.mark.parametrize("config,variant", [("train_te.toml", "tsa_lp_load"), ("train_te_encoders.toml", "tsa_te_profile"),
+@pytest.mark.parametrize("config,variant", [("train_te.toml", "tsa_lp_load"), ("train_te_encoders.toml", "tsa_te_diff"),
                                             ("train_te_profile.toml", "tsa_lp_profile")])
 def test_transmission_error_train_config_is_the_protocol_variant(config, variant):
     """experiments/train_te*.toml (README, "Which sensor") are CNN variants of the sensor protocol: the same
