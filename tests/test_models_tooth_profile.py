@@ -241,3 +241,4 @@ def test_difference_rms_is_blind_to_the_encoders_and_scales_with_the_record(simu
     np.testing.assert_allclose(_column(_set(7.3 * x, rpm, z), "tsa_diff_rms"), 7.3 * clean, rtol=1e-9)
     for speed in np.unique(rpm):
         assert clean[(rpm == speed) & (count == 3)][0] > 1.5 * clean[(rpm == speed) & (count == 1)][0]
+
