@@ -83,19 +83,22 @@ def check_columns(columns) -> tuple[str, ...]:
     return cols
 
 
+def _speed_and_pair(data, c: str) -> np.ndarray:
+    """The pinion shaft frequency of every record; an error naming ``c`` unless the speed and both tooth counts
+    are known (the column reads both shafts' first order)."""
+    fr = data.shaft_hz()
+    require(fr is not None and data.pair.known, "speed_rpm / pair", None,
+            f"the speed and both tooth counts ({c} removes both shafts' first order)")
+    return fr
+
+
 def _column(data, c: str) -> np.ndarray:
     if c == "tooth_profile":
-        fr = data.shaft_hz()
-        require(fr is not None and data.pair.known, "speed_rpm / pair", None,
-                "the speed and both tooth counts (tooth_profile reads the pinion's synchronous average after "
-                "removing both shafts' first order)")
+        fr = _speed_and_pair(data, c)
         return tooth_profile(data.signals, fs_hz=data.fs_hz, shaft_hz=fr, z_pinion=int(data.pair.z_pinion),
                              z_wheel=int(data.pair.z_wheel))
     if c == "tsa_diff_rms":
-        fr = data.shaft_hz()
-        require(fr is not None and data.pair.known, "speed_rpm / pair", None,
-                "the speed and both tooth counts (tsa_diff_rms reads the pinion's synchronous average after "
-                "removing both shafts' first order)")
+        fr = _speed_and_pair(data, c)
         d = tsa_difference(data.signals, PROFILE_SPEC, fs_hz=data.fs_hz, shaft_hz=fr,
                            z_pinion=int(data.pair.z_pinion), z_wheel=int(data.pair.z_wheel))
         return np.sqrt(np.mean(d ** 2, axis=1))
@@ -109,9 +112,7 @@ def _column(data, c: str) -> np.ndarray:
         return np.array([np.sqrt(np.mean(highpass(x[i], data.fs_hz, fr[i], HIGHPASS_ORDERS) ** 2))
                          for i in range(len(x))])
     if c == "signal_rms_no1x":
-        fr = data.shaft_hz()
-        require(fr is not None and data.pair.known, "speed_rpm / pair", None,
-                "the speed and both tooth counts (signal_rms_no1x removes both shafts' first order)")
+        fr = _speed_and_pair(data, c)
         ratio = data.pair.z_pinion / data.pair.z_wheel
         x = np.asarray(data.signals, dtype=float)
         return np.array([rms_without_lines(x[i], data.fs_hz, (fr[i], fr[i] * ratio)) for i in range(len(x))])

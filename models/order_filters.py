@@ -138,11 +138,3 @@ def remove_shaft_lines(x: np.ndarray, fs_hz: float, freqs_hz) -> np.ndarray:
     a = _line_regressors(x.size, fs_hz, freqs_hz)
     return x - _fit(x, a) @ a
 
-
-def line_dft(n: int, cycles_per_sample: float, bins: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The DFT ``X[m] = sum_k x[k] exp(-2 pi i m k / n)`` over ``k = 0 .. n - 1`` of ``cos(2 pi c k)`` and of
-    ``sin(2 pi c k)`` (``c = cycles_per_sample``) at integer bins ``bins``, in closed form (the Dirichlet kernel):
-    what the FFT of a sampled line gives, without sampling it."""
-    m = np.asarray(bins, dtype=float)
-    plus, minus = geometric_sum(n, cycles_per_sample - m / n), geometric_sum(n, -cycles_per_sample - m / n)
-    return 0.5 * (plus + minus), (plus - minus) / 2j

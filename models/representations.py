@@ -364,8 +364,8 @@ def represent_crops_and_difference(signals: np.ndarray, spec: RepresentationSpec
     ``diff`` of shape ``(n_records, samples_per_rev)``.
 
     ``difference_spec`` may differ from ``spec`` only in ``remove_shaft_1x`` (True), and ``crops[0]`` must be 0:
-    the two shaft lines are then taken off the first crop's comb in closed form
-    (:func:`models.order_filters.line_dft`) instead of the record being filtered and transformed again. Equal to
+    the two shaft lines are then taken off the first crop's comb in closed form (:func:`_lines_comb`) instead of
+    the record being filtered and transformed again. Equal to
     the direct computation to rounding (tested). Used for the pitted-teeth profile side input at prediction.
     """
     x = np.asarray(signals)
@@ -382,7 +382,6 @@ def represent_crops_and_difference(signals: np.ndarray, spec: RepresentationSpec
     rep = np.empty((n, len(st), spec.n_channels, spec.length), dtype=np.float32)
     diff = np.empty((n, spec.samples_per_rev))
     zp, zw, spr = int(z_pinion), int(z_wheel), spec.samples_per_rev
-    mask = _difference_mask(spr // 2 + 1, zp)
     for i in range(n):
         xi = _normalise(x[i].astype(float))
         comb = _tsa_comb(xi, spec, float(fs_hz), float(fr[i]), st, zp, zw)
@@ -390,8 +389,8 @@ def represent_crops_and_difference(signals: np.ndarray, spec: RepresentationSpec
         if spec.remove_shaft_1x:
             diff[i] = d[0]
         else:
-            first = comb[0] - _lines_comb(xi, spec, float(fs_hz), float(fr[i]), zp, zw)
-            diff[i] = np.fft.irfft(first * mask, n=spr)
+            first = comb[:1] - _lines_comb(xi, spec, float(fs_hz), float(fr[i]), zp, zw)
+            diff[i] = _tsa_channels(first, spr, zp)[1][0]
     return rep, diff
 
 

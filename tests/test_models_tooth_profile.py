@@ -144,7 +144,7 @@ def test_profile_ignores_the_shaft_encoders_disc_eccentricity(simulated_te):
 
 def test_profile_from_the_networks_fft_equals_a_second_tsa(simulated_te):
     """represent_crops_and_difference reads the profile's difference signal from the first crop's FFT, the two
-    shaft lines taken off in closed form (models/order_filters.py::line_dft, shaft_line_fit), instead of a second
+    shaft lines taken off in closed form (models/representations.py::_lines_comb, order_filters.shaft_line_fit), instead of a second
     TSA of the filtered record. Reference: the direct computation (tsa_difference of the normalised record);
     tolerance 1e-12 of its largest value (rounding), with encoder eccentricity of 20 um on both shafts (~20 times
     the pit's deviation, so a wrong line correction would show). The network's crops are bitwise those of
@@ -179,9 +179,9 @@ def test_profile_from_the_networks_fft_equals_a_second_tsa(simulated_te):
 
 def test_closed_form_line_fit_and_dft_equal_the_sampled_ones():
     """shaft_line_fit (Gram matrix and projections without forming the regressors) equals the normal equations on
-    the formed regressors, rms_without_lines the RMS of the filtered record, and line_dft equals the FFT of the sampled lines, to rounding (1e-12 relative), at a
+    the formed regressors, rms_without_lines the RMS of the filtered record, and geometric_sum equals the FFT of the sampled lines, to rounding (1e-12 relative), at a
     frequency on a bin and one off the bins."""
-    from models.order_filters import (_fit, _line_regressors, line_dft, remove_shaft_lines, rms_without_lines,
+    from models.order_filters import (_fit, _line_regressors, geometric_sum, remove_shaft_lines, rms_without_lines,
                                       shaft_line_fit)
 
     rng = np.random.default_rng(1)
@@ -195,7 +195,8 @@ def test_closed_form_line_fit_and_dft_equal_the_sampled_ones():
     assert rms_without_lines(x, fs, freqs) == pytest.approx(direct, rel=1e-12) and 0.9 < direct < 1.1  # the noise
     m = np.arange(0, 300)
     for c in (37 / n, 0.0123457):
-        cos, sin = line_dft(n, c, m)
+        plus, minus = geometric_sum(n, c - m / n), geometric_sum(n, -c - m / n)   # DFTs of exp(+/- 2 pi i c k)
+        cos, sin = 0.5 * (plus + minus), (plus - minus) / 2j
         np.testing.assert_allclose(cos, np.fft.rfft(np.cos(2 * np.pi * c * k))[m], atol=1e-12 * n)
         np.testing.assert_allclose(sin, np.fft.rfft(np.sin(2 * np.pi * c * k))[m], atol=1e-12 * n)
 
