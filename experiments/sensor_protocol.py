@@ -292,8 +292,6 @@ ABLATIONS = {
     "bearings_all": ("speed", {}, False, BEARING_DRAWS),
     "epochs75": ("in_domain", {"max_epochs": 75}, True, SECOND),
 }
-# tsa_lp_load with the pitted-teeth profile (models/tooth_profile.py) as further side inputs, on each split and
-# training seed: "tsa_lp_profile[_load|_in_domain][_seedN]" (the speed split and seed 0 carry no suffix)
 # tsa_lp_load with the pitted-teeth profile (models/tooth_profile.py) as further side inputs, and tsa_te with it too
 # (both shafts' first order removed from the TSA input and the RMS, so blind to encoder eccentricity; the profile
 # removes them itself), on each split and training seed: "<name>[_load|_in_domain][_seedN]" (the speed split and

@@ -14,6 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 import torch
+from threadpoolctl import threadpool_limits
 
 from gearpit.errors import require
 from models.cnn import GearCNN
@@ -56,9 +57,12 @@ def represent_batch(data: SignalSet, spec: ModelSpec, sl: slice, crops: tuple[fl
     fr, mc = part.shaft_hz(), part.mesh_cps()
     zp, zw = part.pair.z_pinion or None, part.pair.z_wheel or None
     known = None
-    if _profile_shares_fft(spec, crops) and fr is not None and zp and zw:
-        x, diff = represent_crops_and_difference(part.signals, rep, fs_hz=part.fs_hz, crops=crops, shaft_hz=fr,
+    if _profile_shares_fft(spec) and fr is not None and zp and zw:
+        # the difference signal is read at start 0: without a crop there, one is added and its representation dropped
+        lead = crops if crops[0] == 0.0 else (0.0,) + tuple(crops)
+        x, diff = represent_crops_and_difference(part.signals, rep, fs_hz=part.fs_hz, crops=lead, shaft_hz=fr,
                                                  z_pinion=zp, z_wheel=zw, difference_spec=PROFILE_SPEC)
+        x = x[:, len(lead) - len(crops):]
         # the difference signal is that of the normalised record: its RMS times the record's standard deviation is
         # tsa_diff_rms (the difference holds no order 0, so the record's mean does not enter)
         known = {"tooth_profile": profile_of_difference(diff, int(zp)),
@@ -73,13 +77,12 @@ def represent_batch(data: SignalSet, spec: ModelSpec, sl: slice, crops: tuple[fl
     return x, torch.from_numpy(np.repeat(side, len(crops), axis=0))
 
 
-def _profile_shares_fft(spec: ModelSpec, crops: tuple[float, ...]) -> bool:
-    """Whether the profile side inputs can be read from the first crop's FFT (:func:`represent_batch`)."""
+def _profile_shares_fft(spec: ModelSpec) -> bool:
+    """Whether the profile side inputs can be read with the network's crops (:func:`represent_batch`)."""
     if not spec.operating_inputs or not {"tooth_profile", "tsa_diff_rms"} & set(spec.operating_inputs["columns"]):
         return False
     rep = spec.representation_spec()
-    return (rep.kind == "tsa" and rep.highpass_orders == 0 and crops[0] == 0.0
-            and replace(rep, remove_shaft_1x=True) == PROFILE_SPEC)
+    return rep.kind == "tsa" and rep.highpass_orders == 0 and replace(rep, remove_shaft_1x=True) == PROFILE_SPEC
 
 
 @dataclass
@@ -122,12 +125,14 @@ class CNNClassifier:
         slices = [slice(i0, min(i0 + per, n)) for i0 in range(0, n, per)]
         # one torch thread per worker (set in run): the workers share nothing but the read-only network, so no
         # OpenMP barrier waits (train.py: two OpenMP threads on a loaded machine were measured 25x slower than one)
-        if threads == 1 or len(slices) == 1:
-            for sl in slices:
-                run(sl)
-        else:
-            with ThreadPoolExecutor(threads) as pool:
-                list(pool.map(run, slices))
+        # and one BLAS thread (the representation's small matrix products): OpenBLAS's threads fight the workers
+        with threadpool_limits(limits=1, user_api="blas"):
+            if threads == 1 or len(slices) == 1:
+                for sl in slices:
+                    run(sl)
+            else:
+                with ThreadPoolExecutor(threads) as pool:
+                    list(pool.map(run, slices))
         severity = np.clip(sev / k * self.spec.severity_scale, 0.0, None)
         return Predictions(list(self.spec.severity_classes), list(self.spec.teeth_classes), p_sev / k,
                            p_teeth / k, severity, warnings)

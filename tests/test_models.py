@@ -285,6 +285,31 @@ def test_same_seed_same_weights(separable):
     assert not all(torch.equal(a[k], c[k]) for k in a)
 
 
+def test_batches_made_alongside_training_are_the_ones_made_in_turn(separable, monkeypatch):
+    """train._prefetched makes the next batch on a worker thread while the caller trains; the augmentation's draws
+    come from one generator in the same order, so the batches, and a training's weights, are bitwise those made
+    without the worker (forced off here by MAX_THREADS = 1: a 1-thread training then has no spare core)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    import models.train as train_mod
+
+    batches = [np.arange(i, i + 3) for i in range(0, 30, 3)]
+
+    with ThreadPoolExecutor(1) as pool:
+        rng = np.random.default_rng(5)
+        ahead = list(train_mod._prefetched(batches, lambda b: rng.normal(size=4) + b.sum(), pool))
+    rng = np.random.default_rng(5)
+    in_turn = list(train_mod._prefetched(batches, lambda b: rng.normal(size=4) + b.sum(), None))
+    assert [b.tolist() for b, _ in ahead] == [b.tolist() for b in batches]
+    assert all(np.array_equal(x, y) for (_, x), (_, y) in zip(ahead, in_turn))
+
+    train = separable[0].subset(np.arange(24))
+    a = train_cnn(train, _fast_config(max_epochs=2)).network.state_dict()
+    monkeypatch.setattr(train_mod, "MAX_THREADS", 1)
+    b = train_cnn(train, _fast_config(max_epochs=2)).network.state_dict()
+    assert all(torch.equal(a[k], b[k]) for k in a)
+
+
 def test_training_leaves_the_global_torch_rng_alone(separable):
     """Training seeds torch inside fork_rng: the caller's global generator state is unchanged."""
     before = torch.random.get_rng_state().clone()

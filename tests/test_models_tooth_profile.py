@@ -201,6 +201,54 @@ def test_closed_form_line_fit_and_dft_equal_the_sampled_ones():
         np.testing.assert_allclose(sin, np.fft.rfft(np.sin(2 * np.pi * c * k))[m], atol=1e-12 * n)
 
 
+def test_direct_dft_and_closed_form_lines_equal_the_sampled_ones():
+    """order_filters.dft_at equals np.fft.fft at the asked bins, and lines_dft_at the FFT of the formed lines
+    (coefficients referred to sample 0) over a segment that starts elsewhere, to rounding (1e-12 of the largest
+    value), for a segment length with a large prime factor (10529 = 10529) and a power-of-two one."""
+    from models.order_filters import _line_regressors, dft_at, lines_dft_at
+
+    rng = np.random.default_rng(2)
+    fs, freqs = 12800.0, (16.9, 16.9 * 29 / 100)
+    coef = np.array([0.3, 1.0, -2.0, 0.5, 0.7])
+    lines = coef @ _line_regressors(12800, fs, freqs)
+    for n in (10529, 8192):
+        x = rng.normal(size=n)
+        m = np.concatenate([[0, 1, n // 2], rng.choice(n, 40, replace=False)])
+        ref = np.fft.fft(x)[m]
+        np.testing.assert_allclose(dft_at(x, m), ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+        for start in (0, 12800 - n):
+            ref = np.fft.fft(lines[start:start + n])[m]
+            np.testing.assert_allclose(lines_dft_at(coef, freqs, fs, n, m, start), ref, rtol=0,
+                                       atol=1e-12 * np.abs(ref).max())
+
+
+@pytest.mark.parametrize("remove, highpass", [(True, 0.0), (False, 0.0), (True, 2.5)])
+def test_tsa_comb_from_the_direct_dft_equals_the_fft_path(simulated_te, monkeypatch, remove, highpass):
+    """With the low-pass on, _tsa_comb reads its few kept orders by a direct DFT and takes the shaft lines off in
+    closed form; reference: the FFT of the filtered segment (the path taken without the low-pass, forced here by
+    DIRECT_MAX_ORDERS = 0). Records with encoder eccentricity of 20 um on both shafts (so a wrong line correction
+    would show), three crops, speed errors of +/-2 %; tolerance 1e-12 of the comb's largest value."""
+    from dataclasses import replace
+
+    import models.representations as reps
+    from models.tooth_profile import PROFILE_SPEC
+
+    x, rpm, count, z = simulated_te
+    t = np.arange(x.shape[1]) / 12800.0
+    fr = rpm / 60.0
+    x = x + 20e-6 * np.sin(2 * np.pi * fr[:, None] * t + 0.3) + 20e-6 * np.sin(2 * np.pi * fr[:, None] * z / 100 * t)
+    spec = replace(PROFILE_SPEC, remove_shaft_1x=remove, highpass_orders=highpass)
+    starts = (0.0, 0.37, 1.0)
+    for i, factor in zip(range(x.shape[0]), (0.98, 1.0, 1.02) * x.shape[0]):
+        xi = reps._normalise(x[i])
+        direct = reps._tsa_comb(xi, spec, 12800.0, fr[i] * factor, starts, z, 100)
+        with monkeypatch.context() as mp:
+            mp.setattr(reps, "DIRECT_MAX_ORDERS", 0)
+            ref = reps._tsa_comb(xi, spec, 12800.0, fr[i] * factor, starts, z, 100)
+        assert np.abs(ref).max() > 0 and np.count_nonzero(ref[0]) < ref.shape[1] // 4   # the low-pass is on
+        np.testing.assert_allclose(direct, ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+
+
 def test_prediction_reads_the_same_profile_as_training(simulated_te):
     """The side inputs at prediction (profile from the network's FFT, models/classifier.py::represent_batch) equal
     those computed as in training (operating_features, a second TSA) to float32 rounding, for a model whose
@@ -209,6 +257,7 @@ def test_prediction_reads_the_same_profile_as_training(simulated_te):
     from dataclasses import replace
 
     from models.classifier import _profile_shares_fft, represent_batch
+    from models.representations import represent_crops
     from models.tooth_profile import PROFILE_SPEC
     from models.train import TrainConfig, train_cnn
 
@@ -219,11 +268,15 @@ def test_prediction_reads_the_same_profile_as_training(simulated_te):
         cfg = TrainConfig(representation=replace(PROFILE_SPEC, remove_shaft_1x=remove), max_epochs=1, patience=1,
                           batch_size=8, widths=(8, 8, 8, 8, 8), hidden=8, seed=0, operating_inputs=side_inputs)
         model = train_cnn(data, cfg)
-        crops = (0.0, 0.5, 1.0)
-        assert _profile_shares_fft(model.spec, crops) and not _profile_shares_fft(model.spec, (0.5,))
-        _, side = represent_batch(data, model.spec, slice(0, len(data)), crops)
-        direct = np.repeat(operating_features(data, model.spec.operating_inputs), 3, axis=0)
-        np.testing.assert_allclose(side.numpy(), direct, atol=1e-5)
+        assert _profile_shares_fft(model.spec)
+        rep = model.spec.representation_spec()
+        for crops in ((0.0, 0.5, 1.0), (0.5,)):   # the second without a crop at 0: one is added, then dropped
+            x_net, side = represent_batch(data, model.spec, slice(0, len(data)), crops)
+            direct = np.repeat(operating_features(data, model.spec.operating_inputs), len(crops), axis=0)
+            np.testing.assert_allclose(side.numpy(), direct, atol=1e-5)
+            ref = represent_crops(data.signals, rep, fs_hz=data.fs_hz, crops=crops, shaft_hz=data.shaft_hz(),
+                                  z_pinion=z, z_wheel=100)
+            np.testing.assert_array_equal(x_net.numpy(), ref.reshape(-1, *ref.shape[2:]))
 
 
 def test_difference_rms_is_blind_to_the_encoders_and_scales_with_the_record(simulated_te):
