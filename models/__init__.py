@@ -5,9 +5,11 @@
 - ``unknown_rate``    records whose sampling rate is unknown (the SpectraQuest CSVs): mesh-frequency estimate
 - ``toy``             a small labelled toy signal set for tests, benchmarks and examples
 - ``representations`` network inputs: raw segment, envelope spectrum, TSA, order and mesh-order spectra
+- ``tsa``             the TSA and its difference signal (comb of shaft orders, filters, direct DFT of kept orders)
+- ``segments``        per-record normalisation and segment starts, shared by ``representations`` and ``tsa``
 - ``input_checks``    whether records can be represented (speed, tooth counts, segment length, Nyquist)
 - ``order_filters``   the TSA's order low-pass, a zero-phase order high-pass, removal of both shafts' first order
-                      (and its closed form on a spectrum)
+                      (and its closed form on a spectrum), the DFT at a few bins
 - ``operating``       side inputs: known speed and load, the record's level (with or without the shaft lines),
                       the level of the TSA's difference signal, the pitted-teeth profile
 - ``tooth_profile``   how many tooth pitches the TSA's deviation covers (pitted-teeth count, speed- and scale-free)

@@ -20,7 +20,8 @@ from gearpit.errors import require
 from models.cnn import GearCNN
 from models.data import SignalSet
 from models.operating import n_operating, operating_features
-from models.representations import represent_crops, represent_crops_and_difference
+from models.representations import represent_crops
+from models.tsa import represent_crops_and_difference
 from models.tooth_profile import PROFILE_SPEC, profile_of_difference
 from models.spec import ModelSpec, Predictions, check_input
 
@@ -51,7 +52,7 @@ def represent_batch(data: SignalSet, spec: ModelSpec, sl: slice, crops: tuple[fl
     Where the model reads the pitted-teeth profile or the level of its difference signal (``tsa_diff_rms``) and
     its own representation is the profile's TSA (up to the removal of the shaft lines), they are read from the
     first crop's FFT
-    (:func:`models.representations.represent_crops_and_difference`) instead of a second TSA of the record."""
+    (:func:`models.tsa.represent_crops_and_difference`) instead of a second TSA of the record."""
     rep = spec.representation_spec()
     part = data.subset(np.arange(sl.start, sl.stop))
     fr, mc = part.shaft_hz(), part.mesh_cps()

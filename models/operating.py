@@ -57,7 +57,7 @@ import numpy as np
 
 from gearpit.errors import require
 from models.order_filters import highpass, rms_without_lines
-from models.representations import tsa_difference
+from models.tsa import tsa_difference
 from models.tooth_profile import N_FEATURES, PROFILE_SPEC, tooth_profile
 
 #: side inputs: label columns known at test time on a rig, and ``signal_rms``, the root-mean-square of

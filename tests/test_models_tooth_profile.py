@@ -144,15 +144,16 @@ def test_profile_ignores_the_shaft_encoders_disc_eccentricity(simulated_te):
 
 def test_profile_from_the_networks_fft_equals_a_second_tsa(simulated_te):
     """represent_crops_and_difference reads the profile's difference signal from the first crop's FFT, the two
-    shaft lines taken off in closed form (models/representations.py::_lines_comb, order_filters.shaft_line_fit), instead of a second
+    shaft lines taken off in closed form (models/tsa.py::_lines_comb, order_filters.shaft_line_fit), instead of a second
     TSA of the filtered record. Reference: the direct computation (tsa_difference of the normalised record);
     tolerance 1e-12 of its largest value (rounding), with encoder eccentricity of 20 um on both shafts (~20 times
     the pit's deviation, so a wrong line correction would show). The network's crops are bitwise those of
     represent_crops."""
     from dataclasses import replace
 
-    from models.representations import (_normalise, represent_crops, represent_crops_and_difference,
-                                        tsa_difference)
+    from models.representations import represent_crops
+    from models.segments import _normalise
+    from models.tsa import represent_crops_and_difference, tsa_difference
     from models.tooth_profile import PROFILE_SPEC
 
     x, rpm, count, z = simulated_te
@@ -230,7 +231,8 @@ def test_tsa_comb_from_the_direct_dft_equals_the_fft_path(simulated_te, monkeypa
     would show), three crops, speed errors of +/-2 %; tolerance 1e-12 of the comb's largest value."""
     from dataclasses import replace
 
-    import models.representations as reps
+    import models.segments
+    import models.tsa as reps
     from models.tooth_profile import PROFILE_SPEC
 
     x, rpm, count, z = simulated_te
@@ -240,7 +242,7 @@ def test_tsa_comb_from_the_direct_dft_equals_the_fft_path(simulated_te, monkeypa
     spec = replace(PROFILE_SPEC, remove_shaft_1x=remove, highpass_orders=highpass)
     starts = (0.0, 0.37, 1.0)
     for i, factor in zip(range(x.shape[0]), (0.98, 1.0, 1.02) * x.shape[0]):
-        xi = reps._normalise(x[i])
+        xi = models.segments._normalise(x[i])
         direct = reps._tsa_comb(xi, spec, 12800.0, fr[i] * factor, starts, z, 100)
         with monkeypatch.context() as mp:
             mp.setattr(reps, "DIRECT_MAX_ORDERS", 0)
