@@ -132,6 +132,10 @@ def channel_quantity(channel: str | None) -> str | None:
     return None
 
 
+#: relative margin of the trained ranges (a measured speed of 1199.999 rpm is inside [1200, 1500])
+RANGE_TOLERANCE = 1e-3
+
+
 def check_input(spec: ModelSpec, data: SignalSet, *, allow_mismatch: bool = False) -> list[str]:
     """Check ``data`` against ``spec``; return one warning string per record ("" if none).
 
@@ -178,11 +182,17 @@ def check_input(spec: ModelSpec, data: SignalSet, *, allow_mismatch: bool = Fals
                 f">= {need} samples (half the training record length {spec.n_samples})")
         require(data.shaft_hz() is not None, "speed_rpm", None, "the pinion speed of every record (features need it)")
     per_record = [list(common) for _ in range(len(data))]
+    if "speed_note" in data.labels:      # a measurement whose sidecar speed the spectrum did not confirm
+        for i, note in enumerate(data.labels["speed_note"].fillna("").astype(str)):
+            if note:
+                per_record[i].append(note)
     for col, (lo, hi) in spec.ranges.items():
         if col not in data.labels:
             continue
         v = data.labels[col].to_numpy(dtype=float)
-        for i in np.nonzero((v < lo) | (v > hi))[0]:
+        # a measured value (a speed from the spectrum) within RANGE_TOLERANCE of a bound is inside
+        out = (v < lo - RANGE_TOLERANCE * abs(lo)) | (v > hi + RANGE_TOLERANCE * abs(hi))
+        for i in np.nonzero(out)[0]:
             per_record[i].append(f"{col} {v[i]:g} outside the trained range [{lo:g}, {hi:g}]")
     return ["; ".join(w) for w in per_record]
 

@@ -90,23 +90,90 @@ def test_evaluate_on_a_dataset_writes_json_markdown_png(workdir, capsys):
     assert "speed_rpm" in m["breakdown"]
 
 
+def _toy_fast(seed: int):
+    """Two records (healthy, severe) at 2000 rpm, above the trained 1200-1500 rpm."""
+    return toy_signal_set(n_per_class=1, fs_hz=FS, z_pinion=29, z_wheel=100, speeds_rpm=(2000.0,),
+                          classes=(("healthy", 0.0), ("severe", 0.35)), snr_db=20.0, seed=seed)
+
+
+def _joined(a, b):
+    from models.data import SignalSet
+
+    return SignalSet(np.concatenate([a.signals, b.signals]), a.fs_hz, a.pair,
+                     pd.concat([a.labels, b.labels], ignore_index=True))
+
+
 def test_evaluate_and_predict_on_measurement_files(workdir, capsys):
     """A folder of labelled measurement files (CSV + JSON sidecar + labels.csv) is evaluated; predict on
     files prints one row per file and warns on stderr about a speed outside the trained range."""
     folder = workdir / "meas"
-    test = _toy(7, n=2)
-    _write_measurements(folder, test, speeds=[1200.0, 1300.0, 1500.0, 2000.0])
+    _write_measurements(folder, _joined(_toy(7, n=2), _toy_fast(3)))
     assert main(["evaluate", str(workdir / "model"), str(folder), "--out", str(workdir / "eval_meas")]) == 0
     m = json.loads((workdir / "eval_meas" / "metrics.json").read_text())
-    assert m["n_records"] == 4 and m["n_warnings"] == 1
+    assert m["n_records"] == 6 and m["n_warnings"] == 2
     capsys.readouterr()
-    files = [str(folder / f"rec{i}.csv") for i in range(4)]
+    files = [str(folder / f"rec{i}.csv") for i in range(6)]
     assert main(["predict", str(workdir / "model"), *files, "--json"]) == 0
     captured = capsys.readouterr()
     rows = [json.loads(line) for line in captured.out.strip().splitlines()]
-    assert [r["record"] for r in rows] == [f"rec{i}.csv" for i in range(4)]
+    assert [r["record"] for r in rows] == [f"rec{i}.csv" for i in range(6)]
     assert all(0.5 <= r["confidence"] <= 1.0 for r in rows)
-    assert "speed_rpm 2000 outside the trained range" in captured.err
+    assert captured.err.count("outside the trained range") == 2 and captured.err.count("speed_rpm 2000.") == 2
+
+
+def test_measurement_speed_is_measured_not_taken_from_the_sidecar(workdir, tmp_path, capsys):
+    """Sidecars 1.2 % off the true speed (a nominal speed): the loader measures it from the mesh harmonics
+    (within 1e-4 of the truth; compare.speed, searched within 1 / (2 z1)), so the TSA is the true-speed one
+    (correlation > 0.99, against < 0.5 with the sidecar's speed: 1.2 % turns the 29th order by 4 cycles over
+    12 revolutions); with a tachometer channel the pulses give it; a sidecar 3 % off is not confirmed by a search
+    three times as wide, so its speed is kept and the record is warned about; --sidecar-speed takes it as is."""
+    from models.representations import RepresentationSpec, represent
+    from models.sources import load_measurements
+
+    test = _toy(11, n=2)
+    true = test.labels["speed_rpm"].to_numpy()
+    _write_measurements(tmp_path / "off", test, speeds=list(true * 1.012))
+    files = sorted((tmp_path / "off").glob("rec*.csv"))
+    got = load_measurements(files)
+    assert list(got.labels["speed_method"]) == ["spectrum"] * len(test)
+    np.testing.assert_allclose(got.labels["speed_rpm"], true, rtol=1e-4)
+    np.testing.assert_allclose(got.labels["speed_rpm_sidecar"], true * 1.012)
+    spec = RepresentationSpec(kind="tsa", n_revs=8, samples_per_rev=256)
+
+    def tsa(speeds):
+        return represent(test.signals, spec, fs_hz=FS, shaft_hz=np.asarray(speeds) / 60.0, z_pinion=29)[:, 0]
+
+    ref = tsa(true)
+    corr = [np.corrcoef(a, b)[0, 1] for a, b in zip(tsa(got.labels["speed_rpm"]), ref)]
+    stale = [np.corrcoef(a, b)[0, 1] for a, b in zip(tsa(true * 1.012), ref)]
+    assert min(corr) > 0.99 and max(stale) < 0.5
+    nominal = load_measurements(files, refine_speed=False)
+    np.testing.assert_allclose(nominal.labels["speed_rpm"], true * 1.012)
+
+    # a tachometer channel (one pulse per pinion revolution) beside the sensor
+    folder = tmp_path / "tacho"
+    folder.mkdir()
+    x = test.signals[0].astype(float)
+    t = np.arange(x.size) / FS
+    pulses = (np.mod(t * true[0] / 60.0 + 0.3, 1.0) < 0.05).astype(float)
+    pd.DataFrame({"acc": x, "tach": pulses}).to_csv(folder / "rec.csv", index=False)
+    (folder / "rec.json").write_text(json.dumps({"fs_hz": FS, "speed_rpm": true[0] * 0.97, "torque_nm": 50.0,
+                                                 "pair": "spur-gds", "sensor": "acc", "tacho": "tach"}))
+    tach = load_measurements([folder / "rec.csv"])
+    assert tach.labels["speed_method"][0] == "tacho"
+    assert tach.labels["speed_rpm"][0] == pytest.approx(true[0], rel=1e-4)
+
+    # 3 % off: beyond the search, so the sidecar's value stays and the prediction carries a warning
+    _write_measurements(tmp_path / "far", test.subset(np.arange(2)), speeds=list(true[:2] * 1.03))
+    far_files = sorted((tmp_path / "far").glob("rec*.csv"))
+    far = load_measurements(far_files)
+    assert list(far.labels["speed_method"]) == ["sidecar"] * 2
+    np.testing.assert_allclose(far.labels["speed_rpm"], true[:2] * 1.03)
+    capsys.readouterr()
+    assert main(["predict", str(workdir / "model"), *map(str, far_files)]) == 0
+    assert capsys.readouterr().err.count("speed not confirmed by the spectrum") == 2
+    assert main(["predict", str(workdir / "model"), *map(str, far_files), "--sidecar-speed"]) == 0
+    assert "speed not confirmed" not in capsys.readouterr().err
 
 
 def test_predict_refuses_a_wrong_sampling_rate(workdir, capsys):

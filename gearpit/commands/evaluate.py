@@ -26,6 +26,9 @@ def register(sub) -> None:
     p.add_argument("--crops", type=int, default=3, help="test-time segments per record (CNN, default 3)")
     p.add_argument("--threads", type=int, default=min(2, os.cpu_count() or 1), choices=(1, 2),
                    help="worker threads of the CNN (default: 2 where there are two cores; same predictions)")
+    p.add_argument("--sidecar-speed", action="store_true",
+                   help="take each measurement's speed from its sidecar as it is (default: measured from the "
+                        "tachometer channel, else from the mesh harmonics near the sidecar's value)")
     p.add_argument("--allow-mismatch", action="store_true",
                    help="warn instead of refusing a different sampling rate or gear pair where possible")
     p.set_defaults(func=run)
@@ -58,7 +61,8 @@ def run(args) -> int:
 
     require(args.crops >= 1, "--crops", args.crops, "an integer >= 1")
     model = load_model(args.model)
-    data = load_data(args.data, channel=resolve_channel(model, args.data, args.channel), pair=args.pair)
+    data = load_data(args.data, channel=resolve_channel(model, args.data, args.channel), pair=args.pair,
+                     refine_speed=not args.sidecar_speed)
     require(data.has_labels(), "DATA", data.source, "labelled records (a severity_class label at least)")
     pred = predict_any(model, data, crops=args.crops, allow_mismatch=args.allow_mismatch, threads=args.threads)
     metrics = evaluate(data, pred)
