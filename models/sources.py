@@ -19,7 +19,10 @@ searched within half a pinion order at the mesh, ``1 / (2 z1)`` of it: beyond th
 align with a sideband of its neighbour. The spectrum's estimate is kept only when a search three times as wide
 finds the same line; otherwise the sidecar's speed is used and the record carries a warning
 (``speed_note``): the sidecar is then off by more than the search, and a tachometer is needed. The labels keep
-``speed_rpm_sidecar`` and ``speed_method`` (``tacho``, ``spectrum`` or ``sidecar``).
+``speed_rpm_sidecar`` and ``speed_method`` (``tacho``, ``spectrum`` or ``sidecar``). A speed that varies within
+the record is then followed: the record is resampled to its constant mean speed (:mod:`models.order_tracking`)
+where its mesh phase strays from the constant-speed line by more than
+:data:`~models.order_tracking.TRACK_MIN_RAD` (labels ``mesh_phase_dev_rad``, ``order_tracked``).
 """
 from __future__ import annotations
 
@@ -30,6 +33,7 @@ import pandas as pd
 
 from gearpit.errors import InputError, require
 from models.data import PairInfo, SignalSet, teeth_class_of
+from models.order_tracking import TRACK_MIN_RAD
 
 LABELS_FILE = "labels.csv"
 MEASUREMENT_SUFFIXES = (".csv", ".txt", ".npy", ".npz", ".wav", ".mat")
@@ -138,6 +142,30 @@ def measured_speed(measurement) -> tuple[float, str, str]:
                                 "or the measured speed)")
 
 
+def tracked_record(measurement, speed_rpm: float, method: str) -> tuple[np.ndarray, float, float]:
+    """``(record, speed_rpm, mesh phase deviation in rad)`` of a measurement whose mean speed was measured by
+    ``method`` (:func:`measured_speed`): resampled to its constant mean speed where its mesh phase strays more
+    than :data:`models.order_tracking.TRACK_MIN_RAD` from it (:mod:`models.order_tracking`), else as it is.
+    A speed the spectrum did not confirm (``sidecar``) is not tracked (deviation NaN)."""
+    from models.order_tracking import mesh_angle, phase_deviation_rad, resample_to_constant_speed, tacho_angle
+
+    x = measurement.signal
+    if method == "sidecar":
+        return x, speed_rpm, float("nan")
+    z1, z2 = int(measurement.pair.pinion.teeth), int(measurement.pair.wheel.teeth)
+    if method == "tacho":
+        sc = measurement.sidecar
+        angle = tacho_angle(measurement.tacho_signal, measurement.fs_hz, pulses_per_rev=sc.tacho_pulses_per_rev,
+                            per_rev=1.0 if sc.tacho_shaft == "pinion" else z2 / z1)
+    else:
+        angle = mesh_angle(x, measurement.fs_hz, speed_rpm / 60.0, z1)[0]
+    dev = phase_deviation_rad(angle, measurement.fs_hz, z1)
+    if dev <= TRACK_MIN_RAD:
+        return x, speed_rpm, dev
+    y, fr = resample_to_constant_speed(x, measurement.fs_hz, angle)
+    return y, 60.0 * fr, dev
+
+
 def load_measurements(paths: list[str | Path], *, refine_speed: bool = True) -> SignalSet:
     """Records of measurement files (with sidecars) as one signal set (see module docstring); ``refine_speed``:
     measure each record's speed (:func:`measured_speed`) instead of taking the sidecar's."""
@@ -153,13 +181,16 @@ def load_measurements(paths: list[str | Path], *, refine_speed: bool = True) -> 
     for p, f in zip(pair_of, files):
         require((p.z_pinion, p.z_wheel) == (pair_of[0].z_pinion, pair_of[0].z_wheel), f"{f.name}: pair", p.name,
                 f"{pair_of[0].name} (all files alike)")
-    n = min(m.n_samples for m in ms)
-    x = np.stack([np.asarray(m.signal[:n], dtype=np.float32) for m in ms])
-    rows = []
+    rows, records = [], []
     for m, f in zip(ms, files):
         speed, method, note = measured_speed(m) if refine_speed else (float(m.speed_rpm), "sidecar", "")
+        x, speed, dev = tracked_record(m, speed, method) if refine_speed else (m.signal, speed, np.nan)
+        records.append(x)
         rows.append({"file": f.name, "speed_rpm": speed, "torque_nm": float(m.torque_nm),
-                     "speed_rpm_sidecar": float(m.speed_rpm), "speed_method": method, "speed_note": note})
+                     "speed_rpm_sidecar": float(m.speed_rpm), "speed_method": method, "speed_note": note,
+                     "mesh_phase_dev_rad": dev, "order_tracked": bool(dev > TRACK_MIN_RAD)})
+    n = min(r.size for r in records)
+    x = np.stack([np.asarray(r[:n], dtype=np.float32) for r in records])
     labels = pd.DataFrame(rows)
     tables = {f.parent: _labels_table(f.parent) for f in files}
     if all(t is not None for t in tables.values()):
