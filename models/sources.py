@@ -131,9 +131,13 @@ def measured_speed(measurement) -> tuple[float, str, str]:
     z = int(measurement.pair.pinion.teeth)
     half = min(0.05, 0.5 / z)
     kw = dict(z_pinion=z, nominal_rpm=nominal)
-    near = speed_from_spectrum(measurement.signal, measurement.fs_hz, search_fraction=half, **kw).speed_rpm
-    wide = speed_from_spectrum(measurement.signal, measurement.fs_hz, search_fraction=CONFIRM_WIDTH * half,
-                               **kw).speed_rpm
+    try:
+        near = speed_from_spectrum(measurement.signal, measurement.fs_hz, search_fraction=half, **kw).speed_rpm
+        wide = speed_from_spectrum(measurement.signal, measurement.fs_hz, search_fraction=CONFIRM_WIDTH * half,
+                                   **kw).speed_rpm
+    except InputError:      # no mesh harmonic below 0.45 fs
+        return nominal, "sidecar", (f"speed not measured: no mesh harmonic of {nominal:g} rpm x {z} teeth below "
+                                    f"0.45 fs ({0.45 * measurement.fs_hz:g} Hz)")
     if abs(wide - near) <= 1e-4 * near and abs(near / nominal - 1) < 0.98 * half:
         return float(near), "spectrum", ""
     return nominal, "sidecar", (f"speed not confirmed by the spectrum: its strongest mesh line within "
@@ -158,7 +162,10 @@ def tracked_record(measurement, speed_rpm: float, method: str) -> tuple[np.ndarr
         angle = tacho_angle(measurement.tacho_signal, measurement.fs_hz, pulses_per_rev=sc.tacho_pulses_per_rev,
                             per_rev=1.0 if sc.tacho_shaft == "pinion" else z2 / z1)
     else:
-        angle = mesh_angle(x, measurement.fs_hz, speed_rpm / 60.0, z1)[0]
+        try:
+            angle = mesh_angle(x, measurement.fs_hz, speed_rpm / 60.0, z1)[0]
+        except InputError:  # its harmonic and half a shaft order beside it do not fit below 0.45 fs
+            return x, speed_rpm, float("nan")
     dev = phase_deviation_rad(angle, measurement.fs_hz, z1)
     if dev <= TRACK_MIN_RAD:
         return x, speed_rpm, dev

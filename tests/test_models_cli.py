@@ -175,6 +175,17 @@ def test_measurement_speed_is_measured_not_taken_from_the_sidecar(workdir, tmp_p
     assert main(["predict", str(workdir / "model"), *map(str, far_files), "--sidecar-speed"]) == 0
     assert "speed not confirmed" not in capsys.readouterr().err
 
+    # a sampling rate too low for any mesh harmonic: the sidecar's speed, with a note, and no error
+    from types import SimpleNamespace
+
+    from models.sources import measured_speed, tracked_record
+
+    low = SimpleNamespace(speed_rpm=1200.0, tacho=None, fs_hz=1000.0, signal=test.signals[0][:1000].astype(float),
+                          pair=SimpleNamespace(pinion=SimpleNamespace(teeth=29), wheel=SimpleNamespace(teeth=100)))
+    speed, method, note = measured_speed(low)
+    assert (speed, method) == (1200.0, "sidecar") and "no mesh harmonic" in note
+    assert np.isnan(tracked_record(low, 1200.0, "spectrum")[2])
+
 
 def test_predict_refuses_a_wrong_sampling_rate(workdir, capsys):
     """A measurement at another fs: exit code 2 and one line naming fs_hz and the trained value."""
