@@ -33,7 +33,8 @@ import pandas as pd
 
 from gearpit.errors import InputError, require
 from models.data import PairInfo, SignalSet, teeth_class_of
-from models.order_tracking import TRACK_MIN_RAD
+from models.order_tracking import (TRACK_MIN_RAD, mesh_angle, phase_deviation_rad, resample_to_constant_speed,
+                                   tacho_angle)
 
 LABELS_FILE = "labels.csv"
 MEASUREMENT_SUFFIXES = (".csv", ".txt", ".npy", ".npz", ".wav", ".mat")
@@ -151,8 +152,6 @@ def tracked_record(measurement, speed_rpm: float, method: str) -> tuple[np.ndarr
     ``method`` (:func:`measured_speed`): resampled to its constant mean speed where its mesh phase strays more
     than :data:`models.order_tracking.TRACK_MIN_RAD` from it (:mod:`models.order_tracking`), else as it is.
     A speed the spectrum did not confirm (``sidecar``) is not tracked (deviation NaN)."""
-    from models.order_tracking import mesh_angle, phase_deviation_rad, resample_to_constant_speed, tacho_angle
-
     x = measurement.signal
     if method == "sidecar":
         return x, speed_rpm, float("nan")

@@ -124,7 +124,7 @@ def test_evaluate_and_predict_on_measurement_files(workdir, capsys):
 def test_measurement_speed_is_measured_not_taken_from_the_sidecar(workdir, tmp_path, capsys):
     """Sidecars 1.2 % off the true speed (a nominal speed): the loader measures it from the mesh harmonics
     (within 1e-4 of the truth; compare.speed, searched within 1 / (2 z1)), so the TSA is the true-speed one
-    (correlation > 0.99, against < 0.5 with the sidecar's speed: 1.2 % turns the 29th order by 4 cycles over
+    (correlation > 0.99, against < 0.5 with the sidecar's speed: 1.2 % turns the 29th order by 4.2 cycles over
     12 revolutions); with a tachometer channel the pulses give it; a sidecar 3 % off is not confirmed by a search
     three times as wide, so its speed is kept and the record is warned about; --sidecar-speed takes it as is."""
     from models.representations import RepresentationSpec, represent
