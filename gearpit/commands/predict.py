@@ -50,6 +50,10 @@ def run(args) -> int:
     table = pred.to_frame()
     names = data.labels["file"] if "file" in data.labels else data.labels.get("sample_index", table.index)
     table.insert(0, "record", [str(v) for v in names])
+    # measurement files: the speed the model was given, how it was measured, whether the record was order-tracked
+    for col in ("speed_rpm", "speed_method", "order_tracked"):
+        if "speed_method" in data.labels and col in data.labels:
+            table[col] = data.labels[col].to_numpy()
     if args.out is not None:
         with atomic_path(args.out) as tmp:
             table.to_csv(tmp, index=False)
@@ -58,6 +62,7 @@ def run(args) -> int:
             print(json.dumps(row))
     else:
         cols = ["record", "severity_class", "confidence", "severity", "teeth_class", "teeth_confidence"]
+        cols += [c for c in ("speed_rpm", "speed_method") if c in table]
         print(table[cols].to_string(index=False, float_format=lambda v: f"{v:.3f}"))
     n_warn = int((table["warning"] != "").sum())
     for rec, w in zip(table["record"], table["warning"]):
