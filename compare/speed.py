@@ -46,16 +46,12 @@ class SpeedEstimate:
     method : {"tacho", "spectrum", "nominal"}
     track : AngleTrack
         Pinion angle (rad) versus time (s) over the whole record.
-    prominence : float
-        From the spectrum: the harmonic sum at the estimate over its median across the searched speeds (a
-        clear mesh line: hundreds or more; noise alone: a few); NaN from a tachometer.
     """
 
     speed_rpm: float
     nominal_rpm: float
     method: str
     track: AngleTrack
-    prominence: float = float("nan")
 
     @property
     def fr_pinion_hz(self) -> float:
@@ -109,7 +105,6 @@ def speed_from_spectrum(x: np.ndarray, fs_hz: float, *, z_pinion: int, nominal_r
     for m in harm:
         score += np.interp(m * cand, np.arange(spec.size) * df, spec) / max(np.max(spec), 1e-300)
     f0 = float(cand[int(np.argmax(score))])
-    prominence = float(score.max() / max(np.median(score), 1e-300))
     bin_hz = fs_hz / n
 
     def neg(f):
@@ -119,7 +114,7 @@ def speed_from_spectrum(x: np.ndarray, fs_hz: float, *, z_pinion: int, nominal_r
                           options={"xatol": 1e-4 * bin_hz})
     fm = float(res.x)
     rpm = 60.0 * fm / z_pinion
-    return SpeedEstimate(rpm, nominal_rpm, "spectrum", constant_track(n, fs_hz, rpm / 60.0), prominence)
+    return SpeedEstimate(rpm, nominal_rpm, "spectrum", constant_track(n, fs_hz, rpm / 60.0))
 
 
 def refine_speed(measurement, *, search_fraction: float = 0.05) -> SpeedEstimate:
