@@ -119,7 +119,8 @@ def test_evaluate_and_predict_on_measurement_files(workdir, capsys):
     assert [r["record"] for r in rows] == [f"rec{i}.csv" for i in range(6)]
     assert [r["speed_method"] for r in rows] == ["spectrum"] * 6
     # the toy shifts each record circularly (a random start angle): seamless at 1200 rpm, a whole number of
-    # revolutions in the record, so those are not order-tracked; at 2000 rpm the shift leaves a phase jump
+    # revolutions in the record, so those are not order-tracked; at 2000 rpm the shift leaves a phase jump, which
+    # tracking realigns (tests/test_models_order_tracking.py::test_a_phase_jump_is_realigned)
     assert [r["order_tracked"] for r in rows[:4]] == [False] * 4
     assert [round(r["speed_rpm"] / 100) for r in rows] == [12, 12, 12, 12, 20, 20]
     assert all(0.5 <= r["confidence"] <= 1.0 for r in rows)
