@@ -70,6 +70,14 @@ def _needed_bins(bins: np.ndarray) -> np.ndarray:
     return np.concatenate([m0, m0 + 1])
 
 
+def _comb_of_kept(dft: np.ndarray, bins: np.ndarray, k: int, gain: np.ndarray, n_seg: int) -> np.ndarray:
+    """The comb at every order of ``bins`` from the DFT ``dft`` at :func:`_needed_bins` of the ``k`` kept
+    orders, low-passed by their ``gain``: zero above them."""
+    comb = np.zeros(dft.shape[:-1] + (bins.size,), dtype=complex)
+    comb[..., :k] = _interp_bins(dft, bins[:k], n_seg) * gain
+    return comb
+
+
 def _tsa_comb(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, fr: float, starts, z_pinion: int,
               z_wheel: int = 0) -> np.ndarray:
     """The TSA comb of record ``x`` (pinion at ``fr`` Hz) for each start of ``starts``: the spectrum of the
@@ -92,17 +100,16 @@ def _tsa_comb(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, fr: float, 
         dft = dft_at(np.stack([x[i0:i0 + n_seg] for i0 in i0s]), need)
         if freqs:
             dft = dft - lines_dft_at(shaft_line_fit(x, fs_hz, freqs), freqs, fs_hz, n_seg, need, i0s)
-        comb = np.zeros((len(i0s), bins.size), dtype=complex)
-        comb[:, :k] = _interp_bins(dft, bins[:k], n_seg) * gain
-        return comb
+        return _comb_of_kept(dft, bins, k, gain, n_seg)
     if freqs:
         x = remove_shaft_lines(x, fs_hz, freqs)
     spec_c = np.fft.rfft(np.stack([x[i0:i0 + n_seg] for i0 in i0s]), axis=-1)  # one FFT plan for all crops
     idx = np.arange(spec_c.shape[1])
     comb = np.stack([np.interp(bins, idx, c.real, right=0.0) + 1j * np.interp(bins, idx, c.imag, right=0.0)
                      for c in spec_c])
-    if spec.lowpass_mesh_orders > 0:
-        comb = comb * lowpass_gain(comb.shape[1], z_pinion, spec.lowpass_mesh_orders)
+    if spec.lowpass_mesh_orders > 0:      # the low-pass's gain on the kept orders, zero above them
+        comb[:, :k] *= gain
+        comb[:, k:] = 0.0
     return comb
 
 
@@ -117,9 +124,7 @@ def _lines_comb(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, fr: float
     n_seg, bins = _tsa_segment(x.size, spec, fs_hz, fr)
     k, gain = _kept_orders(spec, bins.size, z_pinion)
     dft = lines_dft_at(shaft_line_fit(x, fs_hz, freqs), freqs, fs_hz, n_seg, _needed_bins(bins[:k]))
-    comb = np.zeros(bins.size, dtype=complex)
-    comb[:k] = _interp_bins(dft, bins[:k], n_seg) * gain
-    return comb
+    return _comb_of_kept(dft, bins, k, gain, n_seg)
 
 
 def _tsa_channels(comb: np.ndarray, samples_per_rev: int, z_pinion: int) -> tuple[np.ndarray, np.ndarray]:
