@@ -440,7 +440,9 @@ def main(argv=None) -> int:
                          "cross_condition", "cross_physics", "real"]
     t0 = time.perf_counter()
     default = dataset("default", args.data_dir)
-    x_d, names, cfg = features("default", default, args.jobs)
+    # the default feature table only where a protocol reads it (the one-rig protocol alone needs none of it)
+    needs_x = {"in_domain", "ceiling", "cross_condition", "cross_physics"}
+    x_d, names, cfg = features("default", default, args.jobs) if needs_x & set(todo) else (None, None, None)
     if "in_domain" in todo:
         results["in_domain"] = in_domain("default", default, x_d, names, cfg, list(VARIANTS))
     choice = results.get("in_domain", {}).get("cnn_choice", "tsa")
