@@ -124,8 +124,14 @@ def _calibration_html(cal: dict | None, escalation: dict | None = None) -> list[
                f"{100 * escalation['explained_reduction']:.0f} % (best: "
                + (f"{html.escape(best['effect'])}, {100 * best['reduction']:.1f} %" if best else "none")
                + "). Its row is in the ledger below.</p>"]
+    rej = (escalation or {}).get("calibration_rejected")
+    if rej is not None:
+        why = [f"<p>No claimed effect explained the mismatch of the model as written, so the drive-train nuisances "
+               f"were calibrated; that raised the error from {rej['as_written_error_db']:.2f} to {rej['error_db']:.2f} "
+               "dB (they are fitted to the order view and spoiled the others), so the calibration was not used: "
+               + ", ".join(f"{html.escape(k)} {v:.4g}" for k, v in rej["parameters"].items()) + ".</p>"]
     if cal is None:
-        return ["<p>Nuisance calibration: off (the drive train as the model file gives it).</p>"]
+        return why + ["<p>Nuisance calibration: off (the drive train as the model file gives it).</p>"]
     rows = [[k, _fmt(cal["start"].get(k), 4), _fmt(v, 4), _fmt(cal["sigma"].get(k), 2)]
             for k, v in cal["parameters"].items()]
     return ["<h2>Nuisance calibration</h2>",

@@ -147,7 +147,15 @@ SCHEMA = {
                            "as_written_error_db": _NUM,
                            "as_written_best": {"type": ["object", "null"],
                                                "description": "the first pass's best candidate: effect, reduction, "
-                                                              "claimed"}}},
+                                                              "claimed"},
+                           "calibration_rejected": {
+                               "type": "object",
+                               "description": "\"auto\" calibrated, but the calibrated model's error (error_db) was "
+                                              "above the model as written's (as_written_error_db), so the first pass "
+                                              "is reported and these calibrated values were not used",
+                               "required": ["error_db", "as_written_error_db", "parameters"],
+                               "properties": {"error_db": _NUM, "as_written_error_db": _NUM,
+                                              "parameters": {"type": "object"}}}}},
         "ledger": {"type": "array",
                    "items": {"type": "object", "required": ["run", "model", "error_db"],
                              "properties": {"run": {"type": "integer"}, "model": {"type": "string"},

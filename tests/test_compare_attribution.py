@@ -40,7 +40,15 @@ def _attribute(m, candidates=None, model=None, calibrate=None):
     model = model or ComparisonModel()
     ref = prepare_reference(m)
     staged = compare_and_attribute(m, model, reference=ref, calibrate=calibrate, candidates=candidates)
+    _attribute.staged = staged
     return ref, staged.comparison, staged.attribution
+
+
+def _calibration_tried() -> bool:
+    """Whether the last :func:`_attribute` calibrated: its pass is reported (escalated), or it raised the error
+    and was not used (compare.escalation)."""
+    staged = _attribute.staged
+    return staged.escalated or "calibration_rejected" in staged.summary()
 
 
 def bearing_defect(t):
@@ -69,7 +77,7 @@ def test_disturbance_outside_the_registry_is_unexplained(disturbance):
     effect is claimed for them."""
     _, c, a = _attribute(rig_measurement(duration_s=1.0, extra=disturbance), FAST_CANDIDATES)
     assert not a.claimed, [(x.effect, x.reduction) for x in a.candidates]
-    assert c.calibration is not None
+    assert _calibration_tried()      # nothing explained as written; calibrated, used or not (it may raise the error)
     texts = [u["text"] for u in a.unexplained]
     assert any("not a shaft order" in t or "band" in t for t in texts), texts
 
@@ -142,7 +150,7 @@ def test_controls_with_the_whole_registry(disturbance):
     """The controls above with every registered effect as a candidate (2 s records)."""
     _, c, a = _attribute(rig_measurement(extra=disturbance))
     assert not a.claimed, [(x.effect, x.reduction) for x in a.candidates]
-    assert c.calibration is not None
+    assert c.calibration is not None if disturbance is None else _calibration_tried()
     if disturbance is not None:
         assert a.unexplained
 
@@ -383,3 +391,77 @@ def test_reliability_weights_lower_the_floor_under_a_small_signature(monkeypatch
             e_base = compare(m, base, reference=ref).error_db["total"]
             e_truth = compare(m, truth, reference=ref).error_db["total"]
             assert ok(e_truth / e_base), (seed, s0, e_truth, e_base)
+
+
+@pytest.mark.slow
+def test_a_null_effect_gains_nothing_from_the_nuisance_refit():
+    """compare.attribution._refine_nuisances. Source: a null effect changes nothing (a wheel eccentricity at its
+    lower bound, 0.2 um: its sidebands sit ~80 dB under the mesh line), so no refit may credit it. The rig carries
+    the pitch error and housing mode of the hidden examples, the model both as fitted by the loop before it
+    (grade 7.5, 2900 Hz / 7.75 %; experiments/two_hidden_effects.py), 1 s, calibrated. Before the fix the
+    candidate's refit ran time-stepped (its record period, a wheel revolution, made "auto" choose that path,
+    whose steady state differs from the periodic one at weak mesh harmonics) and was measured against the
+    calibration's baseline, which the same refit of the nuisances alone lowers from 2.07 to 1.46 dB: the null
+    effect was credited 22 % (36 % on the 2 s record of the loop, where it was claimed). Asserted: at most 5 %,
+    and the refitted baseline no worse than the calibrated one."""
+    from compare.attribution import _refine_nuisances
+    from compare.candidates import AttributionSettings, CandidateResult
+    from compare.comparison import NOISE_DRAWS, evaluate, simulate_model
+    from datagen.effects import EffectSpec, build_effects
+
+    rig = (HIDDEN_EXAMPLES["pitch_error"].effect, HIDDEN_EXAMPLES["transmission_path"].effect)
+    m = rig_measurement(rig, duration_s=1.0)
+    ref = prepare_reference(m)
+    model = ComparisonModel(effects=build_effects((
+        {"name": "pitch_error", "grade": 7.5, "gears": "pinion"},
+        {"name": "transmission_path", "housing_frequency_hz": 2900.0, "housing_damping_ratio": 0.0775})))
+    c = calibrated_compare(m, model, reference=ref, calibrate_nuisances=True)
+    params = {"amplitude_m": 2e-7}
+    null = EffectSpec.from_dict({"name": "eccentricity_wheel", **params}).build()
+    y_base, y_null = simulate_model(ref, c.model, extra_effects_list=[(), (null,)], solver={"method": "periodic"})
+    base = evaluate(ref, y_base, ref.fs_hz, noise_draws=NOISE_DRAWS).residuals
+    ev = evaluate(ref, y_null, ref.fs_hz).residuals
+    cand = CandidateResult("eccentricity_wheel", "", dict(params), {}, np.inf, base.excess_total_db, {}, "whole", 1,
+                           raw_baseline_error_db=base.total_db, noise_view_db=dict(base.noise_view_db or {}),
+                           baseline_view_error_db=base.excess_view_db)
+    cand.set_raw(ev.view_error_db, ev.total_db)
+    before = cand.baseline_error_db
+    _refine_nuisances([cand], ref, c.model, c.calibration, AttributionSettings(), [])
+    assert cand.baseline_error_db <= before + 1e-9, (cand.baseline_error_db, before)
+    assert cand.reduction <= 0.05, (cand.reduction, cand.error_db, cand.baseline_error_db, cand.params)
+
+
+def test_auto_keeps_the_model_as_written_when_calibrating_raises_the_error(tmp_path):
+    """compare.escalation: a calibration that makes the model worse is not used. Source: the headline error is
+    the one documented scalar (compare.error); the nuisances are fitted to the order view alone, so they can lower
+    it at the other views' expense. Rig: the pitch error and housing mode of the hidden examples, 1 s; the model
+    with both as the two-effect loop fitted them (experiments/two_hidden_effects.py). Measured: as written 0.67 dB,
+    calibrated 2.07 dB (the envelope view rises; on the 2 s record a tip relief the rig lacks was then claimed).
+    Asserted: "auto" reports the model as written (no calibration, not escalated), its error below the
+    calibrated model's, and says so in the JSON (valid against the schema) and the HTML."""
+    import jsonschema
+
+    from compare.report import document, write_html
+    from compare.schema import SCHEMA
+    from datagen.effects import build_effects
+
+    rig = (HIDDEN_EXAMPLES["pitch_error"].effect, HIDDEN_EXAMPLES["transmission_path"].effect)
+    m = rig_measurement(rig, duration_s=1.0)
+    ref = prepare_reference(m)
+    model = ComparisonModel(effects=build_effects((
+        {"name": "pitch_error", "grade": 7.5, "gears": "pinion"},
+        {"name": "transmission_path", "housing_frequency_hz": 2900.0, "housing_damping_ratio": 0.0775})))
+    staged = compare_and_attribute(m, model, reference=ref, candidates=["tip_relief"])
+    calibrated = calibrated_compare(m, model, reference=ref, calibrate_nuisances=True)
+    assert not staged.escalated and staged.comparison.calibration is None
+    e = staged.comparison.error_db["total"]
+    assert e < calibrated.error_db["total"], (e, calibrated.error_db["total"])
+    summary = staged.summary()
+    rej = summary["calibration_rejected"]
+    assert rej["as_written_error_db"] == pytest.approx(e) and rej["error_db"] == pytest.approx(
+        calibrated.error_db["total"]) and set(rej["parameters"]) == set(NUISANCE)
+    assert not any(c.claimed for c in staged.attribution.candidates)
+    doc = document(staged.comparison, staged.attribution, [], measurement_path="rig", escalation=summary)
+    jsonschema.validate(doc, SCHEMA)
+    html = write_html(staged.comparison, doc, tmp_path / "report.html").read_text()
+    assert "so the calibration was not used" in html
