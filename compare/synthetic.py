@@ -10,6 +10,7 @@ tolerance it is checked at.
 """
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -212,3 +213,55 @@ def verdict(checks: dict) -> str:
     if not (checks["halves"] and checks["fit_ok"]):
         return "no"
     return "yes" if checks["ranks_first_and_claimed"] else ("tie" if checks["rival_of_claimed"] else "no")
+
+
+def hidden_effects_loop(names: list[str], *, seed: int = 3, steps: int = 3, duration_s: float = 2.0,
+                        log=lambda s: None) -> dict:
+    """The user's loop on a rig with several hidden effects at once (``names`` of :data:`HIDDEN_EXAMPLES`, at the
+    first one's operating point; ``experiments/two_hidden_effects.py``): compare and attribute with the default
+    calibration, add the claimed effect with its fitted parameters (and the nuisances it was fitted with), and
+    compare again, until nothing is claimed or ``steps`` comparisons were made. Returns the ledger: per step the
+    model, its error, whether it escalated, the four best candidates and the claim; the final error; each hidden
+    effect's fit against its example's tolerance."""
+    from compare.calibration import calibrated_compare
+    from compare.comparison import prepare_reference
+    from compare.escalation import compare_and_attribute
+    from compare.model import ComparisonModel
+    from datagen.effects import EffectSpec
+
+    effects = tuple(HIDDEN_EXAMPLES[n].effect for n in names)
+    speed, torque = HIDDEN_EXAMPLES[names[0]].speed_rpm, HIDDEN_EXAMPLES[names[0]].torque_nm
+    m = rig_measurement(effects, speed_rpm=speed, torque_nm=torque, duration_s=duration_s, seed=seed)
+    ref = prepare_reference(m)
+    model = ComparisonModel()
+    ledger = []
+    for step in range(steps):
+        t0 = time.perf_counter()
+        st = compare_and_attribute(m, model, reference=ref)
+        c, a = st.comparison, st.attribution
+        claimed = next((x for x in a.candidates if x.claimed), None)
+        row = {"step": step, "model": model.describe(), "error_db": float(c.error_db["total"]),
+               "escalated": st.escalated, "seconds": round(time.perf_counter() - t0, 1),
+               "candidates": [{"effect": x.effect, "reduction": round(float(x.reduction), 3), "claimed": x.claimed,
+                               "params": x.params} for x in a.candidates[:4]],
+               "claimed": claimed.effect if claimed else None}
+        ledger.append(row)
+        log(f"step {step}: {row['model']}: error {row['error_db']:.2f} dB"
+            f"{' (escalated: calibrated)' if st.escalated else ''}, {row['seconds']:.0f} s")
+        for x in row["candidates"]:
+            log(f"    {x['effect']:22s} reduction {x['reduction']:6.3f}{'  claimed' if x['claimed'] else ''}")
+        if claimed is None:
+            break
+        model = model.with_effect(EffectSpec.from_dict({"name": claimed.effect, **claimed.params}).build())
+        if claimed.nuisance:
+            model = model.with_drivetrain(claimed.nuisance)
+    final = calibrated_compare(m, model, reference=ref, calibrate_nuisances=False)
+    fits = {}
+    for n in names:
+        e = next((x for x in model.effects if x.name == n), None)
+        fits[n] = check_fit(HIDDEN_EXAMPLES[n], e.params()) if e is not None else (False, "not added")
+    log(f"final: {model.describe()}: error {final.error_db['total']:.2f} dB")
+    for n, (ok, text) in fits.items():
+        log(f"    {n}: {text} ({'within' if ok else 'OUTSIDE'} tolerance)")
+    return {"hidden": names, "seed": seed, "ledger": ledger, "final_error_db": float(final.error_db["total"]),
+            "final_model": model.describe(), "fits": {n: {"ok": ok, "text": t} for n, (ok, t) in fits.items()}}
