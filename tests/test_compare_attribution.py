@@ -393,6 +393,20 @@ def test_reliability_weights_lower_the_floor_under_a_small_signature(monkeypatch
             assert ok(e_truth / e_base), (seed, s0, e_truth, e_base)
 
 
+def _two_effect_rig_with_both_fitted():
+    """The examples' rig with the pitch error and housing mode on together (1 s), and the model with both as the
+    two-effect loop fitted them (grade 7.5, 2900 Hz / 7.75 %; experiments/two_hidden_effects.py):
+    (measurement, reference, model)."""
+    from datagen.effects import build_effects
+
+    rig = (HIDDEN_EXAMPLES["pitch_error"].effect, HIDDEN_EXAMPLES["transmission_path"].effect)
+    m = rig_measurement(rig, duration_s=1.0)
+    model = ComparisonModel(effects=build_effects((
+        {"name": "pitch_error", "grade": 7.5, "gears": "pinion"},
+        {"name": "transmission_path", "housing_frequency_hz": 2900.0, "housing_damping_ratio": 0.0775})))
+    return m, prepare_reference(m), model
+
+
 @pytest.mark.slow
 def test_a_null_effect_gains_nothing_from_the_nuisance_refit():
     """compare.attribution._refine_nuisances. Source: a null effect changes nothing (a wheel eccentricity at its
@@ -407,14 +421,9 @@ def test_a_null_effect_gains_nothing_from_the_nuisance_refit():
     from compare.attribution import _refine_nuisances
     from compare.candidates import AttributionSettings, CandidateResult
     from compare.comparison import NOISE_DRAWS, evaluate, simulate_model
-    from datagen.effects import EffectSpec, build_effects
+    from datagen.effects import EffectSpec
 
-    rig = (HIDDEN_EXAMPLES["pitch_error"].effect, HIDDEN_EXAMPLES["transmission_path"].effect)
-    m = rig_measurement(rig, duration_s=1.0)
-    ref = prepare_reference(m)
-    model = ComparisonModel(effects=build_effects((
-        {"name": "pitch_error", "grade": 7.5, "gears": "pinion"},
-        {"name": "transmission_path", "housing_frequency_hz": 2900.0, "housing_damping_ratio": 0.0775})))
+    m, ref, model = _two_effect_rig_with_both_fitted()
     c = calibrated_compare(m, model, reference=ref, calibrate_nuisances=True)
     params = {"amplitude_m": 2e-7}
     null = EffectSpec.from_dict({"name": "eccentricity_wheel", **params}).build()
@@ -443,14 +452,8 @@ def test_auto_keeps_the_model_as_written_when_calibrating_raises_the_error(tmp_p
 
     from compare.report import document, write_html
     from compare.schema import SCHEMA
-    from datagen.effects import build_effects
 
-    rig = (HIDDEN_EXAMPLES["pitch_error"].effect, HIDDEN_EXAMPLES["transmission_path"].effect)
-    m = rig_measurement(rig, duration_s=1.0)
-    ref = prepare_reference(m)
-    model = ComparisonModel(effects=build_effects((
-        {"name": "pitch_error", "grade": 7.5, "gears": "pinion"},
-        {"name": "transmission_path", "housing_frequency_hz": 2900.0, "housing_damping_ratio": 0.0775})))
+    m, ref, model = _two_effect_rig_with_both_fitted()
     staged = compare_and_attribute(m, model, reference=ref, candidates=["tip_relief"])
     calibrated = calibrated_compare(m, model, reference=ref, calibrate_nuisances=True)
     assert not staged.escalated and staged.comparison.calibration is None
