@@ -127,8 +127,9 @@ def _calibration_html(cal: dict | None, escalation: dict | None = None) -> list[
     rej = (escalation or {}).get("calibration_rejected")
     if rej is not None:
         why = [f"<p>No claimed effect explained the mismatch of the model as written, so the drive-train nuisances "
-               f"were calibrated; that raised the error from {rej['as_written_error_db']:.2f} to {rej['error_db']:.2f} "
-               "dB (they are fitted to the order view and spoiled the others), so the calibration was not used: "
+               f"were calibrated and the attribution repeated; that pass ended at {rej['error_db']:.2f} dB (with "
+               f"{html.escape(rej.get('claimed') or 'no claim')}), above the model as written's "
+               f"{rej['as_written_error_db']:.2f} dB, so the calibration was not used: "
                + ", ".join(f"{html.escape(k)} {v:.4g}" for k, v in rej["parameters"].items()) + ".</p>"]
     if cal is None:
         return why + ["<p>Nuisance calibration: off (the drive train as the model file gives it).</p>"]

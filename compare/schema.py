@@ -150,11 +150,14 @@ SCHEMA = {
                                                               "claimed"},
                            "calibration_rejected": {
                                "type": "object",
-                               "description": "\"auto\" calibrated, but the calibrated model's error (error_db) was "
-                                              "above the model as written's (as_written_error_db), so the first pass "
-                                              "is reported and these calibrated values were not used",
+                               "description": "\"auto\" calibrated and attributed again, but that pass ended "
+                                              "(error of the model with its claimed effect, or of its baseline) at "
+                                              "error_db, above the model as written's as_written_error_db; so the "
+                                              "first pass is reported and these calibrated values and that claim "
+                                              "were not used",
                                "required": ["error_db", "as_written_error_db", "parameters"],
                                "properties": {"error_db": _NUM, "as_written_error_db": _NUM,
+                                              "claimed": {"type": ["string", "null"]},
                                               "parameters": {"type": "object"}}}}},
         "ledger": {"type": "array",
                    "items": {"type": "object", "required": ["run", "model", "error_db"],

@@ -119,9 +119,9 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
     rej = escalation.get("calibration_rejected")
     if rej is not None:
         messages.append(f"no claimed effect explains {100 * EXPLAINED_REDUCTION:.0f} % of the error, so the drive-train "
-                        f"nuisances were calibrated, but that raised the error ({rej['as_written_error_db']:.2f} -> "
-                        f"{rej['error_db']:.2f} dB: fitted to the order view, they spoiled the others); the model as "
-                        "written is kept")
+                        "nuisances were calibrated and the attribution repeated, but that pass ended higher ("
+                        f"{rej['error_db']:.2f} dB with " + (rej.get("claimed") or "no claim")
+                        + f", against {rej['as_written_error_db']:.2f} dB as written); the model as written is kept")
     cal = comparison.calibration
     if cal is not None:
         messages.append("nuisances calibrated: " + ", ".join(f"{k} {v:.4g}" for k, v in cal.values.items())

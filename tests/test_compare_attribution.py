@@ -441,13 +441,14 @@ def test_a_null_effect_gains_nothing_from_the_nuisance_refit():
 
 
 def test_auto_keeps_the_model_as_written_when_calibrating_raises_the_error(tmp_path):
-    """compare.escalation: a calibration that makes the model worse is not used. Source: the headline error is
-    the one documented scalar (compare.error); the nuisances are fitted to the order view alone, so they can lower
-    it at the other views' expense. Rig: the pitch error and housing mode of the hidden examples, 1 s; the model
-    with both as the two-effect loop fitted them (experiments/two_hidden_effects.py). Measured: as written 0.67 dB,
-    calibrated 2.07 dB (the envelope view rises; on the 2 s record a tip relief the rig lacks was then claimed).
-    Asserted: "auto" reports the model as written (no calibration, not escalated), its error below the
-    calibrated model's, and says so in the JSON (valid against the schema) and the HTML."""
+    """compare.escalation: a calibrated pass that ends above the model as written is not used. Source: the
+    headline error is the one documented scalar (compare.error); the nuisances are fitted to the order view alone,
+    so they can lower it at the other views' expense. Rig: the pitch error and housing mode of the hidden
+    examples, 1 s; the model with both as the two-effect loop fitted them (experiments/two_hidden_effects.py).
+    Measured: as written 0.67 dB, calibrated 2.07 dB (the envelope view rises; on the 2 s record a tip relief the
+    rig lacks was then claimed, 34 %, ending at 0.98 against 0.87 dB). Asserted: "auto" reports the model as
+    written (no calibration, not escalated), its error below the calibrated model's, and says so in the JSON
+    (valid against the schema) and the HTML."""
     import jsonschema
 
     from compare.report import document, write_html
@@ -461,8 +462,8 @@ def test_auto_keeps_the_model_as_written_when_calibrating_raises_the_error(tmp_p
     assert e < calibrated.error_db["total"], (e, calibrated.error_db["total"])
     summary = staged.summary()
     rej = summary["calibration_rejected"]
-    assert rej["as_written_error_db"] == pytest.approx(e) and rej["error_db"] == pytest.approx(
-        calibrated.error_db["total"]) and set(rej["parameters"]) == set(NUISANCE)
+    assert rej["as_written_error_db"] == pytest.approx(e) and e < rej["error_db"], (rej, e)
+    assert set(rej["parameters"]) == set(NUISANCE)
     assert not any(c.claimed for c in staged.attribution.candidates)
     doc = document(staged.comparison, staged.attribution, [], measurement_path="rig", escalation=summary)
     jsonschema.validate(doc, SCHEMA)
