@@ -137,8 +137,8 @@ def explains(attribution) -> bool:
 def ending_error_db(comparison, attribution) -> float:
     """Where a pass ends: the (excess) error of the model with its claimed effect, or of its baseline when it
     claims nothing."""
-    claimed = next((x for x in attribution.candidates if x.claimed), None)
-    return float(claimed.error_db if claimed is not None else comparison.error_db["total"])
+    claimed = attribution.claimed
+    return float(claimed[0].error_db if claimed else comparison.error_db["total"])
 
 
 def resolve_mode(model, calibrate) -> object:
@@ -179,8 +179,7 @@ def compare_and_attribute(measurement, model, *, reference=None, calibrate=None,
     a2 = attributed(c2)
     end, end2 = ending_error_db(c, a), ending_error_db(c2, a2)
     if end2 > end:      # module docstring: the calibrated pass ends above the model as written's
-        claimed = next((x.effect for x in a2.candidates if x.claimed), None)
-        rejected = {"error_db": end2, "as_written_error_db": end, "claimed": claimed,
+        rejected = {"error_db": end2, "as_written_error_db": end, "claimed": a2.claimed[0].effect if a2.claimed else None,
                     "parameters": {k: float(v) for k, v in c2.calibration.values.items()}}
         return Staged(c, a, None, mode, rejected)
     return Staged(c2, a2, (c, a), mode)

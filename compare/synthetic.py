@@ -173,7 +173,6 @@ def run_hidden_case(name: str, *, calibrate: bool | str | None = None, candidate
     from compare.calibration import calibrated_compare
     from compare.comparison import prepare_reference
     from compare.escalation import compare_and_attribute
-    from datagen.effects import EffectSpec
 
     m, ex = hidden_effect_measurement(name, seed=seed, **(rig or {}))
     ref = prepare_reference(m)
@@ -181,13 +180,20 @@ def run_hidden_case(name: str, *, calibrate: bool | str | None = None, candidate
     staged = compare_and_attribute(m, model, reference=ref, calibrate=calibrate, candidates=candidates)
     c0, a = staged.comparison, staged.attribution
     top = a.candidates[0]
-    model1 = model.with_effect(EffectSpec.from_dict({"name": top.effect, **top.params}).build())
-    if top.nuisance:
-        model1 = model1.with_drivetrain(top.nuisance)
+    model1 = with_candidate(model, top)
     # the same comparison as gearpit compare --add makes: calibrated again when calibration is on, at the
     # nuisances the effect was fitted with otherwise (an escalated "auto" run)
     c1 = calibrated_compare(m, model1, reference=ref, calibrate_nuisances=staged.mode is True)
     return ex, c0, a, c1
+
+
+def with_candidate(model, candidate):
+    """``model`` with a fitted candidate effect added at its parameters, and at the nuisances it was fitted with
+    when it has them (what ``gearpit compare --add`` does)."""
+    from datagen.effects import EffectSpec
+
+    out = model.with_effect(EffectSpec.from_dict({"name": candidate.effect, **candidate.params}).build())
+    return out.with_drivetrain(candidate.nuisance) if candidate.nuisance else out
 
 
 def case_checks(name: str, example: HiddenExample, first, attribution, second) -> dict:
@@ -227,7 +233,6 @@ def hidden_effects_loop(names: list[str], *, seed: int = 3, steps: int = 3, dura
     from compare.comparison import prepare_reference
     from compare.escalation import compare_and_attribute
     from compare.model import ComparisonModel
-    from datagen.effects import EffectSpec
 
     effects = tuple(HIDDEN_EXAMPLES[n].effect for n in names)
     speed, torque = HIDDEN_EXAMPLES[names[0]].speed_rpm, HIDDEN_EXAMPLES[names[0]].torque_nm
@@ -239,7 +244,7 @@ def hidden_effects_loop(names: list[str], *, seed: int = 3, steps: int = 3, dura
         t0 = time.perf_counter()
         st = compare_and_attribute(m, model, reference=ref)
         c, a = st.comparison, st.attribution
-        claimed = next((x for x in a.candidates if x.claimed), None)
+        claimed = a.claimed[0] if a.claimed else None
         row = {"step": step, "model": model.describe(), "error_db": float(c.error_db["total"]),
                "escalated": st.escalated, "seconds": round(time.perf_counter() - t0, 1),
                "candidates": [{"effect": x.effect, "reduction": round(float(x.reduction), 3), "claimed": x.claimed,
@@ -252,9 +257,7 @@ def hidden_effects_loop(names: list[str], *, seed: int = 3, steps: int = 3, dura
             log(f"    {x['effect']:22s} reduction {x['reduction']:6.3f}{'  claimed' if x['claimed'] else ''}")
         if claimed is None:
             break
-        model = model.with_effect(EffectSpec.from_dict({"name": claimed.effect, **claimed.params}).build())
-        if claimed.nuisance:
-            model = model.with_drivetrain(claimed.nuisance)
+        model = with_candidate(model, claimed)
     final = calibrated_compare(m, model, reference=ref, calibrate_nuisances=False)
     fits = {}
     for n in names:
