@@ -6,7 +6,8 @@ For every registered effect that is not in the model (and is not part of the mea
 by how much they lower the error, and the best one that passes the claim rule is claimed
 (:mod:`compare.candidates`). The periodic effects are fitted in this process, the time-stepped ones (on a
 window, then confirmed on the whole record, :func:`_confirm_on_record`) in worker processes meanwhile, one per
-:func:`compare.fitting.transient_groups` group.
+:func:`compare.fitting.transient_groups` group. When the model itself needs time stepping (an earlier ``--add``
+put a fluctuation, backlash or Hertz contact in it), every candidate is fitted the time-stepped way.
 
 Nuisance calibration: when the model's drive-train nuisances were calibrated
 first (:mod:`compare.calibration`; ``calibration`` given), the model handed in
@@ -82,7 +83,10 @@ def attribute(ref: Reference, model, baseline_residual: np.ndarray, *, candidate
     t0 = time.perf_counter()
     pool = [n for n in (candidates if candidates is not None else names())
             if n not in model.effect_names and n not in CHAIN_EFFECTS]
-    transient = [n for n in pool if fit_space(get(n)).transient]
+    # a model that needs time stepping itself (it holds a fluctuation, backlash, Hertz contact: added by an
+    # earlier --add) has no periodic steady state, so every candidate is fitted on the time-stepped path with it
+    model_transient = any(e.is_nonlinear or e.is_nonstationary for e in model.effects)
+    transient = [n for n in pool if model_transient or fit_space(get(n)).transient]
     periodic = [n for n in pool if n not in transient]
     n_eff = effective_count(ref.plan, q=ref.reliability)
     results, n_sims, seconds = [], 0, {}

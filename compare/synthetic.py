@@ -224,21 +224,37 @@ def verdict(checks: dict) -> str:
 def hidden_effects_loop(names: list[str], *, seed: int = 3, steps: int = 3, duration_s: float = 2.0,
                         log=lambda s: None) -> dict:
     """The user's loop on a rig with several hidden effects at once (``names`` of :data:`HIDDEN_EXAMPLES`, at the
-    first one's operating point; ``experiments/two_hidden_effects.py``): compare and attribute with the default
+    first one's operating point; ``experiments/two_hidden_effects.py``): :func:`compare_loop` from the bare
+    model. Returns the ledger: per step the model, its error, whether it escalated, the four best candidates and
+    the claim; the final error; each hidden effect's fit against its example's tolerance."""
+    effects = tuple(HIDDEN_EXAMPLES[n].effect for n in names)
+    speed, torque = HIDDEN_EXAMPLES[names[0]].speed_rpm, HIDDEN_EXAMPLES[names[0]].torque_nm
+    m = rig_measurement(effects, speed_rpm=speed, torque_nm=torque, duration_s=duration_s, seed=seed)
+    ledger, model, final = compare_loop(m, steps=steps, log=log)
+    fits = {}
+    for n in names:
+        e = next((x for x in model.effects if x.name == n), None)
+        fits[n] = check_fit(HIDDEN_EXAMPLES[n], e.params()) if e is not None else (False, "not added")
+    log(f"final: {model.describe()}: error {final.error_db['total']:.2f} dB")
+    for n, (ok, text) in fits.items():
+        log(f"    {n}: {text} ({'within' if ok else 'OUTSIDE'} tolerance)")
+    return {"hidden": names, "seed": seed, "ledger": ledger, "final_error_db": float(final.error_db["total"]),
+            "final_model": model.describe(), "fits": {n: {"ok": ok, "text": t} for n, (ok, t) in fits.items()}}
+
+
+def compare_loop(m, model=None, *, steps: int = 3, log=lambda s: None):
+    """The ``gearpit compare --add`` loop on a measurement ``m``: compare and attribute with the default
     calibration, add the claimed effect with its fitted parameters (and the nuisances it was fitted with), and
-    compare again, until nothing is claimed or ``steps`` comparisons were made. Returns the ledger: per step the
-    model, its error, whether it escalated, the four best candidates and the claim; the final error; each hidden
-    effect's fit against its example's tolerance."""
+    compare again, until nothing is claimed or ``steps`` comparisons were made. Returns ``(ledger, final model,
+    final comparison)``; a ledger row holds the step's model, error (dB), whether it escalated, the four best
+    candidates and the claim."""
     from compare.calibration import calibrated_compare
     from compare.comparison import prepare_reference
     from compare.escalation import compare_and_attribute
     from compare.model import ComparisonModel
 
-    effects = tuple(HIDDEN_EXAMPLES[n].effect for n in names)
-    speed, torque = HIDDEN_EXAMPLES[names[0]].speed_rpm, HIDDEN_EXAMPLES[names[0]].torque_nm
-    m = rig_measurement(effects, speed_rpm=speed, torque_nm=torque, duration_s=duration_s, seed=seed)
     ref = prepare_reference(m)
-    model = ComparisonModel()
+    model = model if model is not None else ComparisonModel()
     ledger = []
     for step in range(steps):
         t0 = time.perf_counter()
@@ -249,7 +265,8 @@ def hidden_effects_loop(names: list[str], *, seed: int = 3, steps: int = 3, dura
                "escalated": st.escalated, "seconds": round(time.perf_counter() - t0, 1),
                "candidates": [{"effect": x.effect, "reduction": round(float(x.reduction), 3), "claimed": x.claimed,
                                "params": x.params} for x in a.candidates[:4]],
-               "claimed": claimed.effect if claimed else None}
+               "claimed": claimed.effect if claimed else None, "claimed_params": claimed.params if claimed else None,
+               "rivals": list(a.rivals)}
         ledger.append(row)
         log(f"step {step}: {row['model']}: error {row['error_db']:.2f} dB"
             f"{' (escalated: calibrated)' if st.escalated else ''}, {row['seconds']:.0f} s")
@@ -259,12 +276,4 @@ def hidden_effects_loop(names: list[str], *, seed: int = 3, steps: int = 3, dura
             break
         model = with_candidate(model, claimed)
     final = calibrated_compare(m, model, reference=ref, calibrate_nuisances=False)
-    fits = {}
-    for n in names:
-        e = next((x for x in model.effects if x.name == n), None)
-        fits[n] = check_fit(HIDDEN_EXAMPLES[n], e.params()) if e is not None else (False, "not added")
-    log(f"final: {model.describe()}: error {final.error_db['total']:.2f} dB")
-    for n, (ok, text) in fits.items():
-        log(f"    {n}: {text} ({'within' if ok else 'OUTSIDE'} tolerance)")
-    return {"hidden": names, "seed": seed, "ledger": ledger, "final_error_db": float(final.error_db["total"]),
-            "final_model": model.describe(), "fits": {n: {"ok": ok, "text": t} for n, (ok, t) in fits.items()}}
+    return ledger, model, final

@@ -224,3 +224,19 @@ def test_time_stepped_candidates_split_by_contact_law():
     assert transient_groups(["torque_fluctuation", "speed_fluctuation"]) == [["torque_fluctuation", "speed_fluctuation"]]
     assert transient_groups(["backlash"]) == [["backlash"]]
     assert transient_groups([]) == []
+
+
+def test_fundamental_seed_recovers_a_modulation_whose_first_sidebands_are_weak():
+    """Source: Bessel sidebands of phase modulation (J_2(beta) > J_1(beta) for beta > 1.84): the strongest
+    sideband offset of a strong modulation at f is 2 f, and the offsets it comes with (3 f) are multiples of f that
+    2 f cannot make. The seeds measured on the foreign rig's 1 % / 23 Hz speed fluctuation give 23 Hz; families
+    that already hold their fundamental, or whose members are all multiples of the strongest, give nothing."""
+    from compare.fitspace import fundamental_seed
+
+    assert fundamental_seed([46.0056, 68.9952, 130.998, 233.978, 966.666, 32.749]) == pytest.approx(23.0028)
+    assert fundamental_seed([69.0, 46.0]) == pytest.approx(23.0)               # n = 3: 46 = 2 x 23
+    assert fundamental_seed([23.0, 46.0, 69.0]) is None                        # the fundamental leads already
+    assert fundamental_seed([33.33, 16.67, 50.0]) is None                      # shaft orders: fr is a seed
+    assert fundamental_seed([46.0, 92.0, 138.0]) is None                       # multiples of 46 only
+    assert fundamental_seed([3150.0, 2500.0, 4000.0]) is None                  # band centres
+    assert fundamental_seed([46.0]) is None
