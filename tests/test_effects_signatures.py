@@ -311,3 +311,26 @@ def test_torque_fluctuation_line_and_sidebands():
     assert ripple / 3 < ft < 3 * ripple
     side = [FM - F_FLUCT, FM + F_FLUCT]
     assert np.all(db(lines(t, side, window="hann"), lines(h, side, window="hann")) > 30.0)
+
+
+def test_random_single_pitch_deviations_have_the_asked_spread_and_close():
+    """pitch_error's random single pitch deviations (module docstring of datagen.effects.pitch_error). Source: the
+    definition: a single pitch deviation is the position difference of adjacent teeth; with random_single_factor r
+    their standard deviation is r f_pt (ISO 1328-1 tolerance of the grade) along the line of action times
+    cos(alpha_t), to 1e-9; once round they sum to zero (the teeth close the circle); the draw is the seed's; with
+    r = 0 the table is the sinusoid alone, as before."""
+    from datagen.geometry import preset
+
+    pair = preset("spur-gds")
+    tol = gear_tolerances(pair, "pinion", 5.0)
+    plain = PitchError(grade=5.0).tooth_table_m(pair, "pinion")
+    ref = 0.5 * tol.cumulative_pitch_m * np.sin(2 * np.pi * np.arange(29) / 29) * math.cos(pair.pressure_angle_t_rad)
+    np.testing.assert_allclose(plain, ref, atol=1e-15)
+    a = PitchError(grade=5.0, random_single_factor=0.5, random_seed=12).tooth_table_m(pair, "pinion")
+    steps = np.diff(np.r_[a - plain, (a - plain)[0]])
+    assert abs(steps.sum()) < 1e-15
+    assert np.std(steps) == pytest.approx(0.5 * tol.single_pitch_m * math.cos(pair.pressure_angle_t_rad), rel=1e-9)
+    b = PitchError(grade=5.0, random_single_factor=0.5, random_seed=12).tooth_table_m(pair, "pinion")
+    c = PitchError(grade=5.0, random_single_factor=0.5, random_seed=13).tooth_table_m(pair, "pinion")
+    np.testing.assert_array_equal(a, b)
+    assert np.max(np.abs(a - c)) > 0.3 * tol.single_pitch_m
