@@ -1,7 +1,8 @@
 """The compare loop on 'measurements' from another simulator: does the attribution generalise beyond gearpit's physics?
 
-Run: ``python experiments/foreign_rig_check.py [--only CASE ...] [--seed N] [--duration S]`` (1-4 min per case on 2
-cores). The last line is JSON.
+Run: ``python experiments/foreign_rig_check.py [--only CASE ...] [--seed N] [--duration S] [--steps N]``
+(1-35 min per case on 2 cores: a model holding an eccentricity simulates a whole gear revolution per trial). The
+last line is JSON.
 
 Every other check of the comparison (tests, ``hidden_effect_table.py``, ``generalisation_check.py``) makes its
 "measurements" with gearpit's own simulator, so the model and the rig share every modelling choice but the
