@@ -16,7 +16,7 @@ again).
 
 What counts as right for a foreign rig. Between two simulators the mesh harmonics differ even for a healthy
 pair (another stiffness model, other modes), and a comparison with the bare model claims an effect that reshapes
-them (profile error, tip relief, transmission path, Hertz stiffness, backlash: :data:`MESH_SHAPE`): that is the
+them (profile error, tip relief, transmission path, Hertz stiffness, backlash: ``foreign_rig.MESH_SHAPE``): that is the
 models' difference, and the user's loop (``gearpit compare --add``, :func:`compare.synthetic.compare_loop`, up to
 three comparisons) adds it and goes on. So a case passes when, along the loop, the hidden effect's *family* is
 claimed (the same physical signature in gearpit's registry: :data:`FOREIGN_CASES`) with only mesh-shape effects
@@ -37,10 +37,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))
 
-from foreign_rig import ForeignRig, foreign_measurement  # noqa: E402
-
-#: effects that only reshape the mesh harmonics (alike on every tooth): what two simulators' healthy pairs differ by
-MESH_SHAPE = {"profile_error", "tip_relief", "transmission_path", "hertz_nonlinear", "backlash"}
+from foreign_rig import MESH_SHAPE, ForeignRig, foreign_measurement  # noqa: E402
 
 #: case -> (ForeignRig overrides, accepted effects, (parameter, kind, tolerance, true value) or None)
 FOREIGN_CASES = {

@@ -110,13 +110,12 @@ def test_foreign_pinion_eccentricity_is_found_and_a_bearing_defect_claims_no_fau
     """Source: the foreign rig's truth. A 150 um pinion eccentricity: eccentricity_pinion claimed, within a factor
     2 (the foreign model moves the path of contact, not the mesh timing; measured 84 um, 70 %). A bearing defect
     (impacts at 71.3 Hz ringing 3.9 kHz, no shaft order): no effect claimed but those that reshape the mesh
-    harmonics, which two simulators' healthy pairs differ by (experiments/foreign_rig_check.py, MESH_SHAPE),
+    harmonics, which two simulators' healthy pairs differ by (foreign_rig.MESH_SHAPE),
     and disagreements flagged unexplained."""
     c, a = _first_comparison(eccentricity_m=(150e-6, 0.0))
     claimed = a.claimed[0]
     assert claimed.effect == "eccentricity_pinion", [(x.effect, x.reduction) for x in a.candidates]
     assert 0.5 <= claimed.params["amplitude_m"] / 150e-6 <= 2.0
     c, a = _first_comparison(bearing_defect=(71.3, 3900.0, 40.0))
-    mesh_shape = {"profile_error", "tip_relief", "transmission_path", "hertz_nonlinear", "backlash"}
-    assert all(x.effect in mesh_shape for x in a.claimed), [(x.effect, x.reduction) for x in a.claimed]
+    assert all(x.effect in fr.MESH_SHAPE for x in a.claimed), [(x.effect, x.reduction) for x in a.claimed]
     assert a.unexplained
