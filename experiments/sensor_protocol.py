@@ -131,18 +131,19 @@ def splits(data, inner: bool = False) -> dict[str, tuple[np.ndarray, np.ndarray,
 
 
 def second_draw(data_dir: Path, channel: str, *, seed_offset: int = EXTRA_SEED_OFFSET, tag: str = "second_draw",
-                drive_train: dict | None = None, effects: dict | None = None) -> SignalSet:
+                drive_train: dict | None = None, effects: dict | None = None, base: str = "default") -> SignalSet:
     """Another draw of the default sweep (its seeds + ``seed_offset``): same classes and physics (but for
     ``drive_train`` fields given as sweep draws, e.g. ``{"bearing_n_per_m": [3e7, 3e8]}``, and ``effects``
     tables added after the sweep's own, e.g. ``{"shaft_encoder_error": {...}}``), other records (with
     ``seed_offset = 0`` the same records, each effect drawing from its own stream: only the added effects
-    differ); generated once into ``data_dir / f"{part}_{tag}"``, then read."""
+    differ); generated once into ``data_dir / f"{part}_{tag}"``, then read. ``base``: another sweep of
+    ``experiments/models_sweeps/`` (with its ``_healthy`` part) in place of the default."""
     from datagen.generate import generate
     from datagen.sweep import sweep_from_dict
     from gearpit.tomlio import read_toml
 
     parts = []
-    for part in ("default", "default_healthy"):
+    for part in (base, f"{base}_healthy"):
         doc = read_toml(SWEEPS / f"{part}.toml")
         doc["sweep"]["seed"] += seed_offset
         doc["sweep"]["name"] += "-" + tag.replace("_", "-")
