@@ -41,6 +41,8 @@ import numpy as np
 from datagen.mesh_excitation import MeshRecord
 
 METHODS = ("auto", "periodic", "transient")
+#: where the mesh is read: the pinion's actual angle or its nominal rotation (datagen.simulate.SolverOptions)
+MESH_ANGLES = ("dynamic", "nominal")
 #: decay of the start-up transient before the kept record starts
 TRANSIENT_DECAY = math.log(1000.0)
 #: time steps per chunk in the transient path
@@ -64,6 +66,7 @@ class DynamicCase:
     omega_dt: float = 0.3
     method: str = "auto"
     transient_s: float | None = None
+    mesh_angle: str = "dynamic"
 
     @property
     def n_out(self) -> int:

@@ -171,7 +171,7 @@ class Batch:
 
 
 def run_linear(batch: Batch, S0: np.ndarray, k: np.ndarray, c: np.ndarray, E: np.ndarray | None,
-               force_scale: np.ndarray, *, store: bool, store_shift: int = 0) -> tuple:
+               force_scale: np.ndarray, *, store: bool, store_shift: int = 0, groups: int | None = None) -> tuple:
     """March the linear mesh law ``F = k delta + c delta' - E`` over ``len(k)`` steps.
 
     Parameters
@@ -192,6 +192,10 @@ def run_linear(batch: Batch, S0: np.ndarray, k: np.ndarray, c: np.ndarray, E: np
         Return the trajectory of column 0.
     store_shift : int
         Step ``i`` (1..N) is stored in row ``(i - 1 + store_shift) % N`` (1: row j = time j dt of a period).
+    groups : int or None
+        With ``groups = G`` the C cases are ``C / G`` records of ``G`` consecutive pieces each (the mesh
+        cycles of :func:`datagen.shooting._storing_pass`): ``traj`` is stored as (C / G, 3n, G, N) and
+        ``force`` as (C / G, G, N), each record's pieces side by side in time.
 
     Returns
     -------
@@ -213,8 +217,9 @@ def run_linear(batch: Batch, S0: np.ndarray, k: np.ndarray, c: np.ndarray, E: np
     gE = (gamma * E)[..., None] * force_scale[None, None, :] if E is not None else None   # (N, C, J)
     us = batch.u_state[:, None, :]
     S = batch.augment(S0, force_scale)
-    traj = np.empty((C, m, N)) if store else None
-    force = np.empty((C, N)) if store else None
+    R = C // (groups or 1)
+    traj = (np.empty((C, m, N)) if groups is None else np.empty((R, m, groups, N))) if store else None
+    force = (np.empty((C, N)) if groups is None else np.empty((R, groups, N))) if store else None
     for i in range(N):
         Y = batch.product(S)
         F = alpha[i] * Y[..., m + 1] + beta[i] * Y[..., m + 2]
@@ -224,8 +229,12 @@ def run_linear(batch: Batch, S0: np.ndarray, k: np.ndarray, c: np.ndarray, E: np
         S -= F[..., None] * us
         if store:
             r = (i + store_shift) % N
-            traj[:, :, r] = S[:, 0, :m]
-            force[:, r] = F[:, 0]
+            if groups is None:
+                traj[:, :, r] = S[:, 0, :m]
+                force[:, r] = F[:, 0]
+            else:
+                traj[:, :, :, r] = S[:, 0, :m].reshape(R, groups, m).transpose(0, 2, 1)
+                force[:, :, r] = F[:, 0].reshape(R, groups)
     return S[..., :m], traj, force
 
 

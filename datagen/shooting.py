@@ -7,14 +7,23 @@ healthy pair, one pinion revolution for pinion pits). With ``n_c`` Newmark steps
 ``x = (q, q')`` is the product of the ``P`` one-cycle maps; cycles with identical stiffness and
 error-force samples (all healthy cycles of a case) share one map, so only the distinct cycles are
 integrated with ``2n + 1`` columns (the particular solution from rest plus the ``2n`` unit initial
-states). The periodic start solves ``(I - Phi) x0 = p``; one storing pass from ``x0`` gives the
-record (its end matches ``x0`` to ~1e-12, reported as ``periodicity_error``), which
-:func:`datagen.decimation.resample_periodic` anti-aliases and samples at the output rate.
-The mesh position is ``x = f_m t + x_s`` with ``x_s`` the pinion's static wind-up.
+states). The periodic start solves ``(I - Phi) x0 = p``; the cycles' start states follow by the maps, and
+one storing pass marches all cycles side by side from them (each cycle's end matches the next one's start
+to ~1e-12, reported as ``periodicity_error``); :func:`datagen.decimation.resample_periodic` anti-aliases
+the record and samples it at the output rate.
+
+The mesh position is the pinion's actual angle, ``x = f_m t + z_1 phi_1 / 2 pi`` (nominal rotation plus the
+dynamic angle, static wind-up included), as in the time-stepped path. The response depends on it only
+weakly, so it is found by passes: the first at the static wind-up, each further one at the previous pass's
+angle, its periodic state by multiple shooting with the first pass's maps (:func:`periodic_response`);
+``periodicity_error`` is then ~1e-9. ``solver.mesh_angle = "nominal"`` keeps the first pass (the classic
+linear time-varying model).
 
 References
 ----------
 Nayfeh, A. H., Balachandran, B. (1995). Applied Nonlinear Dynamics, sec. 6.1 (shooting; monodromy matrix).
+Ascher, U. M., Mattheij, R. M. M., Russell, R. D. (1995). Numerical Solution of Boundary Value Problems for
+    Ordinary Differential Equations, ch. 4 (multiple shooting).
 """
 from __future__ import annotations
 
@@ -26,79 +35,67 @@ from datagen.dynamics import Response, mesh_damping, static_state
 from datagen.output_channels import channel_coefficients, channel_names, channel_values, finish
 
 
+#: the periodic path evaluates the mesh at the pinion's actual angle (nominal rotation plus its dynamic angle
+#: ``phi_1``, as the time-stepped path does) by fixed-point iteration; it stops when the angle's change between
+#: two passes is below this many mesh cycles: a timing error of 1e-4 mesh cycles, i.e. a phase of 2 pi h 1e-4 rad at
+#: mesh harmonic h and spurious sidebands below 3e-4 h of the mesh line (healthy and pitted pairs: 2 passes;
+#: 100 um of eccentricity: 3)
+ANGLE_TOL_CYCLES = 1e-4
+#: at most this many passes (the map from the angle to the response contracts by ~0.02 per pass)
+MAX_ANGLE_PASSES = 5
+
+
 def periodic_response(cases, P: int, n_c: int) -> list[Response]:
     """Periodic steady state by shooting, the monodromy composed from distinct mesh cycles.
 
     With ``n_c`` steps per mesh cycle, the one-period map is the product of the
     ``P`` one-cycle maps ``x -> Phi_j x + p_j`` on ``x = (q, q')``. Cycles with
     the same samples (all healthy cycles of a case) share their map, so the
-    ``2n + 1``-column runs cover only the distinct cycles; one storing pass
-    from the periodic initial state follows.
+    ``2n + 1``-column runs cover only the distinct cycles; the record follows from
+    the cycles' start states, all cycles marched side by side (:func:`_march`).
+
+    The mesh position is the pinion's actual angle in mesh cycles, ``x = f_m t + z_1 phi_1 / 2 pi``, as in the
+    time-stepped path (:mod:`datagen.time_stepping`): each further pass reads the mesh at the angle of the
+    previous one (the first at the static wind-up only), until the angle changes by less than
+    :data:`ANGLE_TOL_CYCLES`. Its periodic state is found by multiple shooting over the cycles with the first
+    pass's one-cycle maps as the (approximate) Jacobian (:func:`_reshoot`): a few one-column marches, not a new
+    monodromy. A healthy or pitted pair's dynamic angle swings by ~1e-3 of a cycle; a gear that follows a
+    transmission error of tens of micrometres (eccentricity, pitch error) turns by ~1e-2 of a cycle once per
+    revolution, which phase-modulates the mesh: its sidebands change by up to 40 % (the two paths disagreed by
+    that much before the iteration). A case with ``solver.mesh_angle = "nominal"`` keeps the first pass's
+    positions (the classic linear time-varying model).
     """
     N = P * n_c
     C = len(cases)
     n = cases[0].model.n
-    m = 3 * n
     ops = [newmark.newmark_operators(c.model.M, c.model.K_s, c.model.C_s, c.model.v, c.period_s / N) for c in cases]
     f = np.stack([c.model.f_static for c in cases])
-    batch = newmark.Batch(ops, f)
     c_m = mesh_damping(cases)
     statics = [static_state(c) for c in cases]
+    i_phi1 = cases[0].model.index("phi_1")
+    z1_per_rad = np.array([c.model.pair.pinion.teeth for c in cases], dtype=float) / (2 * np.pi)
     u = np.arange(1, n_c + 1) / n_c
-    kc = np.empty((C, P, n_c))
-    Ec = np.empty((C, P, n_c))
-    for j, c in enumerate(cases):
-        x = np.arange(P)[:, None] + (u[None, :] + statics[j][1])
-        kc[j], Ec[j] = c.record.at(x)
-    has_E = bool(np.any(Ec != 0))
-    k = kc.transpose(1, 2, 0)                                           # (P, n_c, C) views
-    E = Ec.transpose(1, 2, 0)
-    # The map of cycle j acts on (q, q'); its start acceleration is consistent with the last sample of
-    # cycle j-1, so a cycle is identified by that sample plus its own n_c samples.
-    k_prev = np.roll(k[:, -1, :], 1, axis=0)                           # (P, C)
-    E_prev = np.roll(E[:, -1, :], 1, axis=0)
-    rows, inverse = [], np.empty((C, P), dtype=np.int64)
-    for j in range(C):                       # set-up loop over cases (not over time)
-        kk = np.hstack([k_prev[:, j:j + 1], kc[j]])
-        ee = np.hstack([E_prev[:, j:j + 1], Ec[j]])
-        key = np.round(np.hstack([kk / np.abs(kk).max(), ee / max(np.abs(ee).max(), 1e-300)]), 10)
-        seen: dict[bytes, int] = {}
-        for cy in range(P):
-            b = key[cy].tobytes()
-            if b not in seen:
-                seen[b] = len(rows)
-                rows.append((j, cy))
-            inverse[j, cy] = seen[b]
-    case_of = np.array([r[0] for r in rows])
-    cyc_of = np.array([r[1] for r in rows])
-    Q = len(rows)
-    k_q = kc[case_of, cyc_of].T                                         # (n_c, Q)
-    E_q = Ec[case_of, cyc_of].T if has_E else None
-    ops_q = [ops[j] for j in case_of]
-    batch_q = newmark.Batch(ops_q, f[case_of])
-    # columns: 0 = particular from rest, 1..2n = unit (q, q'); accelerations consistent at the start
-    x_init = np.zeros((Q, 2 * n + 1, 2 * n))
-    x_init[:, 1:, :] = np.eye(2 * n)[None]
-    scale = np.zeros(2 * n + 1)
-    scale[0] = 1.0
-    S0 = newmark.consistent_states(ops_q, x_init, f[case_of], k_prev[cyc_of, case_of], E_prev[cyc_of, case_of],
-                                   c_m[case_of], scale)
-    S_end, _, _ = newmark.run_linear(batch_q, S0, k_q, c_m[case_of], E_q, scale, store=False)
-    Phi_q = np.transpose(S_end[:, 1:, :2 * n], (0, 2, 1))              # column i = image of unit state i
-    p_q = S_end[:, 0, :2 * n]
-    Phi = np.broadcast_to(np.eye(2 * n), (C, 2 * n, 2 * n)).copy()
-    p = np.zeros((C, 2 * n))
-    for cy in range(P):
-        sel = inverse[:, cy]
-        Phi = np.matmul(Phi_q[sel], Phi)
-        p = np.einsum("cij,cj->ci", Phi_q[sel], p) + p_q[sel]
-    x0 = np.linalg.solve(np.eye(2 * n)[None] - Phi, p[..., None])[..., 0]
-    s0 = newmark.consistent_states(ops, x0[:, None, :], f, kc[:, -1, -1], Ec[:, -1, -1], c_m, np.ones(1))
-    k_t = np.ascontiguousarray(kc.reshape(C, N).T)
-    E_t = np.ascontiguousarray(Ec.reshape(C, N).T) if has_E else None
-    S2, traj, force = newmark.run_linear(batch, s0, k_t, c_m, E_t, np.ones(1), store=True, store_shift=1)
-    s0 = s0[:, 0]
-    periodicity = np.abs(S2[:, 0, :2 * n] - s0[:, :2 * n]).max(axis=1) / np.abs(s0[:, :2 * n]).max(axis=1)
+    nominal = np.arange(P)[:, None] + u[None, :]                         # (P, n_c): f_m t at steps 1..N
+    x = np.stack([nominal + s[1] for s in statics])                      # (C, P, n_c)
+    dynamic = np.array([c.mesh_angle == "dynamic" for c in cases])
+    mesh = _mesh_samples(cases, x)
+    maps, inverse, distinct = _cycle_maps(ops, f, c_m, mesh, n)
+    starts = _fixed_point_starts(maps, inverse)
+    traj, force, ends = _march(ops, f, c_m, mesh, starts)
+    periodicity = _defect(starts, ends)
+    passes = 1
+    change = np.zeros(C)
+    while dynamic.any():
+        # step i (1..N) of the period is row i % N of traj
+        angle = z1_per_rad[:, None] * np.roll(traj[:, i_phi1, :], -1, axis=-1)
+        x_new = np.where(dynamic[:, None, None], nominal[None] + angle.reshape(C, P, n_c), x)
+        change = np.abs(x_new - x).max(axis=(1, 2))
+        if np.all(change <= ANGLE_TOL_CYCLES) or passes == MAX_ANGLE_PASSES:
+            break
+        x, passes = x_new, passes + 1
+        mesh = _mesh_samples(cases, x)
+        traj, force, starts, periodicity = _reshoot(ops, f, c_m, mesh, starts, maps, inverse)
+    swing = (x - nominal[None]).max(axis=(1, 2)) - (x - nominal[None]).min(axis=(1, 2))
     co = channel_coefficients(cases)
     omega = np.array([2 * np.pi * c.speed_rpm / 60.0 for c in cases])
     fine = channel_values(traj, force, omega[:, None], co)      # (C, n_ch, N), sample j at time j dt
@@ -115,8 +112,158 @@ def periodic_response(cases, P: int, n_c: int) -> list[Response]:
             ch = finish(vals[jj], names, omega[j] * t, co["gear_ratio"][j])
             out[j] = Response(ch, {
                 "method": "periodic", "dt_s": c.period_s / N, "steps_per_period": N, "period_s": c.period_s,
-                "period_cycles": c.record.period_cycles, "distinct_cycles": int(np.sum(case_of == j)),
+                "period_cycles": c.record.period_cycles, "distinct_cycles": int(distinct[j]),
+                "angle_passes": passes, "angle_change_cycles": float(change[j]),
+                "angle_swing_cycles": float(swing[j]),
                 "periodicity_error": float(periodicity[j]), "transient_discarded_s": 0.0, "start_time_s": 0.0,
                 "natural_frequencies_hz": c.model.natural_frequencies_hz.tolist(),
                 "mesh_damping_n_s_per_m": c.model.c_mesh_n_s_per_m})
     return out
+
+
+
+#: multiple shooting with the first pass's maps stops at this defect (relative to the state; the output is
+#: read to ~1e-6), or after :data:`MAX_RESHOOT` marches (each contracts the defect by ~1e-4 for the angles of a
+#: pitted pair: three marches per pass)
+RESHOOT_TOL = 1e-8
+MAX_RESHOOT = 12
+
+
+def _mesh_samples(cases, x):
+    """Stiffness and error force at the positions ``x`` (C, P, n_c), and at each cycle's previous sample."""
+    C, P, n_c = x.shape
+    kc = np.empty((C, P, n_c))
+    Ec = np.empty((C, P, n_c))
+    for j, c in enumerate(cases):
+        kc[j], Ec[j] = c.record.at(x[j])
+    # a cycle's start acceleration is consistent with the last sample of the cycle before
+    k_prev = np.roll(kc[:, :, -1], 1, axis=1)                           # (C, P)
+    E_prev = np.roll(Ec[:, :, -1], 1, axis=1)
+    return {"k": kc, "E": Ec if np.any(Ec != 0) else None, "k_prev": k_prev,
+            "E_prev": E_prev if np.any(Ec != 0) else np.zeros_like(k_prev)}
+
+
+def _cycle_maps(ops, f, c_m, mesh, n):
+    """The one-cycle maps ``x -> Phi x + p`` of the distinct cycles: ``(Phi_q, p_q)``, the map of cycle ``cy``
+    of case ``j`` (``inverse[j, cy]``) and the number of distinct cycles per case."""
+    kc, Ec, k_prev, E_prev = mesh["k"], mesh["E"], mesh["k_prev"], mesh["E_prev"]
+    C, P, n_c = kc.shape
+    E_all = Ec if Ec is not None else np.zeros_like(kc)
+    rows, inverse = [], np.empty((C, P), dtype=np.int64)
+    for j in range(C):                       # set-up loop over cases (not over time)
+        kk = np.hstack([k_prev[j][:, None], kc[j]])
+        ee = np.hstack([E_prev[j][:, None], E_all[j]])
+        key = np.round(np.hstack([kk / np.abs(kk).max(), ee / max(np.abs(ee).max(), 1e-300)]), 10)
+        seen: dict[bytes, int] = {}
+        for cy in range(P):
+            b = key[cy].tobytes()
+            if b not in seen:
+                seen[b] = len(rows)
+                rows.append((j, cy))
+            inverse[j, cy] = seen[b]
+    case_of = np.array([r[0] for r in rows])
+    cyc_of = np.array([r[1] for r in rows])
+    Q = len(rows)
+    k_q = kc[case_of, cyc_of].T                                         # (n_c, Q)
+    E_q = Ec[case_of, cyc_of].T if Ec is not None else None
+    ops_q = [ops[j] for j in case_of]
+    batch_q = newmark.Batch(ops_q, f[case_of])
+    # columns: 0 = particular from rest, 1..2n = unit (q, q'); accelerations consistent at the start
+    x_init = np.zeros((Q, 2 * n + 1, 2 * n))
+    x_init[:, 1:, :] = np.eye(2 * n)[None]
+    scale = np.zeros(2 * n + 1)
+    scale[0] = 1.0
+    S0 = newmark.consistent_states(ops_q, x_init, f[case_of], k_prev[case_of, cyc_of], E_prev[case_of, cyc_of],
+                                   c_m[case_of], scale)
+    S_end, _, _ = newmark.run_linear(batch_q, S0, k_q, c_m[case_of], E_q, scale, store=False)
+    Phi_q = np.transpose(S_end[:, 1:, :2 * n], (0, 2, 1))              # column i = image of unit state i
+    p_q = S_end[:, 0, :2 * n]
+    return (Phi_q, p_q), inverse, np.bincount(case_of, minlength=C)
+
+
+def _fixed_point_starts(maps, inverse):
+    """Start states (C, P + 1, 2n) of every cycle of the periodic solution (the last = the first again): the
+    fixed point of the composed maps, then each cycle's map applied in turn."""
+    Phi_q, p_q = maps
+    C, P = inverse.shape
+    n2 = p_q.shape[1]
+    Phi = np.broadcast_to(np.eye(n2), (C, n2, n2)).copy()
+    p = np.zeros((C, n2))
+    for cy in range(P):
+        sel = inverse[:, cy]
+        Phi = np.matmul(Phi_q[sel], Phi)
+        p = np.einsum("cij,cj->ci", Phi_q[sel], p) + p_q[sel]
+    starts = np.empty((C, P + 1, n2))
+    starts[:, 0] = np.linalg.solve(np.eye(n2)[None] - Phi, p[..., None])[..., 0]
+    for cy in range(P):
+        sel = inverse[:, cy]
+        starts[:, cy + 1] = np.einsum("cij,cj->ci", Phi_q[sel], starts[:, cy]) + p_q[sel]
+    return starts
+
+
+def _march(ops, f, c_m, mesh, starts):
+    """Every cycle of every case from its start state, side by side (one batch row per cycle: a Python loop of
+    ``n_c`` steps instead of ``P n_c``). Returns ``traj`` (C, 3n, N) and ``force`` (C, N), sample ``j`` at time
+    ``j dt`` of the period, and each cycle's end state (C, P, 2n)."""
+    kc, Ec = mesh["k"], mesh["E"]
+    C, P, n_c = kc.shape
+    n2 = starts.shape[2]
+    case_of = np.repeat(np.arange(C), P)
+    ops_r = [ops[j] for j in case_of]
+    batch = newmark.Batch(ops_r, f[case_of])
+    s0 = newmark.consistent_states(ops_r, starts[:, :P].reshape(C * P, 1, n2), f[case_of],
+                                   mesh["k_prev"].reshape(-1), mesh["E_prev"].reshape(-1), c_m[case_of], np.ones(1))
+    k_r = np.ascontiguousarray(kc.reshape(C * P, n_c).T)
+    E_r = np.ascontiguousarray(Ec.reshape(C * P, n_c).T) if Ec is not None else None
+    S_end, traj, force = newmark.run_linear(batch, s0, k_r, c_m[case_of], E_r, np.ones(1), store=True,
+                                            store_shift=1, groups=P)
+    # step i < n_c of cycle cy is time cy n_c + i of the period, stored in place; its last step (time (cy + 1) n_c)
+    # landed in the cycle's own first sample and belongs to the next cycle's
+    traj[..., 0] = np.roll(traj[..., 0], 1, axis=-1)
+    force[..., 0] = np.roll(force[..., 0], 1, axis=-1)
+    m = traj.shape[1]
+    return traj.reshape(C, m, P * n_c), force.reshape(C, P * n_c), S_end[:, 0, :n2].reshape(C, P, n2)
+
+
+def _defect(starts, ends):
+    """Largest mismatch between a cycle's end and the next cycle's start (the last against the first, which
+    the composed maps also return to), relative to the state's size, per case."""
+    scale = np.abs(starts[:, 0]).max(axis=1)
+    d = np.abs(ends - starts[:, 1:]).max(axis=(1, 2))
+    return np.maximum(d, np.abs(starts[:, -1] - starts[:, 0]).max(axis=1)) / scale
+
+
+def _reshoot(ops, f, c_m, mesh, starts, maps, inverse):
+    """Periodic solution for new mesh samples by multiple shooting over the cycles, from the previous start states,
+    with the maps of another solution (close to this one's) as the Jacobian.
+
+    March all cycles from the starts ``s_cy``; their ends ``e_cy`` miss the next starts by ``d_cy = e_cy -
+    s_{cy+1}``. The corrections solve ``Delta s_{cy+1} = Phi_cy Delta s_cy + d_cy`` around the cycle (a fixed
+    point of the composed maps, as in :func:`_fixed_point_starts`). Exact maps would close the defect in one
+    step; the old maps close it by the factor their change makes (~1e-2 here).
+    """
+    Phi_q, _ = maps
+    C, P = inverse.shape
+    n2 = starts.shape[2]
+    s = starts.copy()
+    for _ in range(MAX_RESHOOT):
+        traj, force, ends = _march(ops, f, c_m, mesh, s)
+        s[:, P] = s[:, 0]
+        periodicity = _defect(s, ends)
+        if np.all(periodicity <= RESHOOT_TOL):
+            break
+        d = ends - s[:, 1:]                                              # (C, P, 2n)
+        Phi = np.broadcast_to(np.eye(n2), (C, n2, n2)).copy()
+        r = np.zeros((C, n2))
+        for cy in range(P):
+            sel = inverse[:, cy]
+            Phi = np.matmul(Phi_q[sel], Phi)
+            r = np.einsum("cij,cj->ci", Phi_q[sel], r) + d[:, cy]
+        delta = np.linalg.solve(np.eye(n2)[None] - Phi, r[..., None])[..., 0]
+        s[:, 0] += delta
+        for cy in range(P):
+            sel = inverse[:, cy]
+            delta = np.einsum("cij,cj->ci", Phi_q[sel], delta) + d[:, cy]
+            s[:, cy + 1] += delta
+        s[:, P] = s[:, 0]
+    return traj, force, s, periodicity

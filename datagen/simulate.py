@@ -24,7 +24,7 @@ Case file (TOML; units in key names, unknown keys are errors)::
     severity = 0.2
     [stiffness]                  # optional: positions_per_cycle, n_slices, pit_model
     [drivetrain]                 # optional: datagen.lumped_model.DriveTrain fields (SI)
-    [solver]                     # optional: omega_dt (0.3), method ("auto"), transient_s
+    [solver]                     # optional: omega_dt (0.3), method ("auto"), transient_s, mesh_angle ("dynamic")
     [[effects]]                  # optional, repeatable: name + parameters (SI)
     name = "noise"
     snr_db = 30.0
@@ -76,17 +76,24 @@ class OperatingPoint:
 
 @dataclass(frozen=True)
 class SolverOptions:
-    """Numerical options: ``omega_dt`` (w_max dt), ``method`` (auto|periodic|transient), ``transient_s`` (s)."""
+    """Numerical options: ``omega_dt`` (w_max dt), ``method`` (auto|periodic|transient), ``transient_s`` (s),
+    ``mesh_angle``: where the mesh stiffness and error are read, at the pinion's actual angle ("dynamic": the
+    nominal rotation plus its vibration ``phi_1``, so a gear that follows a transmission error shifts its mesh
+    timing) or at the nominal rotation plus the static wind-up ("nominal": the classic linear time-varying
+    model, ``k(t)`` fixed in advance). Both solution paths honour it (:mod:`datagen.shooting`)."""
 
     omega_dt: float = 0.3
     method: str = "auto"
     transient_s: float | None = None
+    mesh_angle: str = "dynamic"
 
     def __post_init__(self):
         require_range("solver.omega_dt", self.omega_dt, 0.01, 1.0)
         require(self.method in dynamics.METHODS, "solver.method", self.method, f"one of: {', '.join(dynamics.METHODS)}")
         if self.transient_s is not None:
             require_range("solver.transient_s", self.transient_s, 0.0, 100.0)
+        require(self.mesh_angle in dynamics.MESH_ANGLES, "solver.mesh_angle", self.mesh_angle,
+                f"one of: {', '.join(dynamics.MESH_ANGLES)}")
 
 
 @dataclass(frozen=True)
@@ -318,7 +325,8 @@ def prepare(case: Case) -> dynamics.DynamicCase:
     return dynamics.DynamicCase(model=model, record=rec, effects=case.effects, ctx=ctx,
                                 speed_rpm=case.operating.speed_rpm, torque_nm=case.operating.torque_nm,
                                 fs_hz=case.fs_hz, duration_s=case.duration_s, omega_dt=case.solver.omega_dt,
-                                method=case.solver.method, transient_s=case.solver.transient_s)
+                                method=case.solver.method, transient_s=case.solver.transient_s,
+                                mesh_angle=case.solver.mesh_angle)
 
 
 def effect_rng(seed: int, position: int) -> np.random.Generator:

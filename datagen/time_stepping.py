@@ -44,6 +44,9 @@ def transient_response(cases, R: int, n_discard: int) -> list[Response]:
     z1_per_rad = np.array([c.model.pair.pinion.teeth for c in cases], dtype=float) / (2 * np.pi)  # mesh cycles/rad
     ratio2 = np.array([c.model.ratio[c.model.index("phi_2")] for c in cases])
     i_phi1 = cases[0].model.index("phi_1")
+    # the mesh is read at the pinion's actual angle, or ("nominal") at its rotation plus the static wind-up
+    dynamic = np.array([c.mesh_angle == "dynamic" for c in cases], dtype=float)
+    x_static = np.array([static_state(c)[1] for c in cases])
     i_phim, i_phib = cases[0].model.index("phi_m"), cases[0].model.index("phi_b")
     M_ratio = np.stack([c.model.M @ c.model.ratio for c in cases])            # (C, n)
     motor_torque = np.array([c.model.f_static[i_phim] for c in cases])
@@ -95,7 +98,7 @@ def transient_response(cases, R: int, n_discard: int) -> list[Response]:
     def mesh_force(i: int, S: np.ndarray, delta_lin: np.ndarray, h: np.ndarray):
         j = i % CHUNK
         phi_pred = S[:, i_phi1] + dt * S[:, n + i_phi1] + 0.5 * dt * dt * S[:, 2 * n + i_phi1]
-        x = z1_per_rad * (theta_steps["theta"][j] + phi_pred)
+        x = z1_per_rad * (theta_steps["theta"][j] + dynamic * phi_pred) + (1.0 - dynamic) * x_static
         if not nonlinear:
             k, E = records.at(x)
             kappa = k + (2.0 / dt) * c_m

@@ -204,10 +204,12 @@ def test_calibration_recovers_the_nuisances_of_a_rig_without_hidden_effect():
 def test_calibration_of_an_identical_model_stays_at_the_truth_and_the_noise_floor():
     """Rig and model with the same (default) drive train: the calibration leaves the values within
     NUISANCE_TOLERANCE of the truth, and the error stays at the noise floor: within 0.05 dB of the identical
-    model's own error, which is below 1 dB (independent noise draws at SNR 30 dB)."""
+    model's own error, which is below 1 dB (independent noise draws at SNR 30 dB). A 2 s record: on 1 s the noise
+    alone moved the mesh damping 15-27 % (0.0609 or 0.0550 for 0.07, as the simulator's mesh timing changed) for
+    0.02 dB of error; on 2 s it stays within 4 %."""
     from datagen.lumped_model import DriveTrain
 
-    m = rig_measurement(duration_s=1.0, nuisance={})
+    m = rig_measurement(duration_s=2.0, nuisance={})
     ref = prepare_reference(m)
     cal = calibrate(ref, ComparisonModel())
     truth = {k: getattr(DriveTrain(), k) for k in NUISANCE}
