@@ -242,20 +242,23 @@ def hidden_effects_loop(names: list[str], *, seed: int = 3, steps: int = 3, dura
             "final_model": model.describe(), "fits": {n: {"ok": ok, "text": t} for n, (ok, t) in fits.items()}}
 
 
-def compare_loop(m, model=None, *, steps: int = 3, log=lambda s: None):
+def compare_loop(m, model=None, *, steps: int = 3, refit: bool = True, log=lambda s: None):
     """The ``gearpit compare --add`` loop on a measurement ``m``: compare and attribute with the default
-    calibration, add the claimed effect with its fitted parameters (and the nuisances it was fitted with), and
-    compare again, until nothing is claimed or ``steps`` comparisons were made. Returns ``(ledger, final model,
-    final comparison)``; a ledger row holds the step's model, error (dB), whether it escalated, the four best
-    candidates and the claim."""
+    calibration, add the claimed effect with its fitted parameters (and the nuisances it was fitted with), with
+    ``refit`` fit the effects the loop added before it again against the model that now holds it
+    (:func:`compare.refit.refit_effects`, ``gearpit compare --refit``), and compare again, until nothing is
+    claimed or ``steps`` comparisons were made. Returns ``(ledger, final model, final comparison)``; a ledger row
+    holds the step's model, error (dB), whether it escalated, the four best candidates, the claim and the
+    refits that followed it."""
     from compare.calibration import calibrated_compare
     from compare.comparison import prepare_reference
     from compare.escalation import compare_and_attribute
     from compare.model import ComparisonModel
+    from compare.refit import refit_effects
 
     ref = prepare_reference(m)
     model = model if model is not None else ComparisonModel()
-    ledger = []
+    ledger, added = [], []
     for step in range(steps):
         t0 = time.perf_counter()
         st = compare_and_attribute(m, model, reference=ref)
@@ -275,5 +278,12 @@ def compare_loop(m, model=None, *, steps: int = 3, log=lambda s: None):
         if claimed is None:
             break
         model = with_candidate(model, claimed)
+        if refit and added:
+            model, notes = refit_effects(m, model, names=added, reference=ref)
+            row["refits"] = notes
+            for r in notes:
+                log(f"    refit {r['effect']}: {r['before']} -> {r['after']}: error {r['error_before_db']:.2f} -> "
+                    f"{r['error_after_db']:.2f} dB{'' if r['kept'] else ' (not kept)'}")
+        added.append(claimed.effect)
     final = calibrated_compare(m, model, reference=ref, calibrate_nuisances=False)
     return ledger, model, final

@@ -13,6 +13,9 @@ Used by ``gearpit compare`` and by ``experiments/compare_walkthrough.py``.
   started from the defaults with a housing mode in the model it settled
   worse than the joint fit had); the model file is rewritten with the effect
   added;
+- ``refit`` (True: every effect of the model, or a list of names) fits those effects again, each against
+  the model without it (:mod:`compare.refit`: an effect fitted before a later one was found leans on its
+  absence), after the ``add`` items; a refit that lowers the error is kept and the model file rewritten;
 - ``plugins`` are Python files with user effects; they are recorded in the model;
 - with ``calibrate=True`` (or the model's ``[calibration] enabled = true``) the drive-train nuisances are
   calibrated to the measurement before the comparison (:mod:`compare.calibration`): the calibrated model is
@@ -78,7 +81,7 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
         add: list[str] = (), plugins: list[str] = (), attribution: bool = True, candidates: list[str] | None = None,
         report: str | Path | None = None, json_path: str | Path | None = None, seed: int = 0,
         settings: AttributionSettings | None = None, parallel: bool = True,
-        calibrate: bool | str | None = None) -> Outcome:
+        calibrate: bool | str | None = None, refit: bool | list[str] | None = None) -> Outcome:
     """The whole loop (module docstring); returns everything it computed. ``calibrate``: True, False or "auto"
     (None: as the model file says, default "auto")."""
     messages: list[str] = []
@@ -98,10 +101,19 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
     if candidates is not None:
         for c in candidates:
             get(c)
+    ref = prepare_reference(measurement)
+    if refit:
+        from compare.refit import refit_effects
+
+        model, notes = refit_effects(measurement, model, names=None if refit is True else list(refit), reference=ref,
+                                     parallel=parallel)
+        for r in notes:
+            messages.append(f"refit {r['effect']}: {r['before']} -> {r['after']}: error {r['error_before_db']:.2f} -> "
+                            f"{r['error_after_db']:.2f} dB" + ("" if r["kept"] else " (not kept)"))
+        changed = changed or any(r["kept"] for r in notes)
     if changed:
         model.save(mpath)
         messages.append(f"model written: {mpath}")
-    ref = prepare_reference(measurement)
     staged = compare_and_attribute(measurement, model, reference=ref, calibrate=calibrate, attribution=attribution,
                                    candidates=candidates, settings=settings or AttributionSettings(seed=seed),
                                    seed=seed, parallel=parallel)

@@ -15,6 +15,9 @@ def register(sub) -> None:
                    help="add an effect to the model file (without values: the parameters last fitted); repeatable")
     p.add_argument("--plugin", action="append", default=[], type=str, metavar="FILE.py",
                    help="Python file registering user effects; recorded in the model; repeatable")
+    p.add_argument("--refit", nargs="?", const="all", default=None, metavar="EFFECT,...",
+                   help="before comparing, fit the model's effects again (all, or these), each against the model "
+                        "without it; kept where the error falls, written to the model file")
     p.add_argument("--candidates", help="comma-separated effects to try (default: every registered one not in the model)")
     p.add_argument("--no-attribution", action="store_true", help="only compare; do not fit missing effects")
     p.add_argument("--calibrate", action=argparse.BooleanOptionalAction, default=None,
@@ -34,7 +37,9 @@ def run(args: argparse.Namespace) -> int:
     cands = [c.strip() for c in args.candidates.split(",") if c.strip()] if args.candidates else None
     out = run_loop(args.measurement, meta=args.meta, model_path=args.model, add=args.add, plugins=args.plugin,
                    attribution=not args.no_attribution, candidates=cands, report=args.report, json_path=args.json,
-                   seed=args.seed, calibrate=args.calibrate)
+                   seed=args.seed, calibrate=args.calibrate,
+                   refit=None if args.refit is None else
+                   (True if args.refit == "all" else [r.strip() for r in args.refit.split(",") if r.strip()]))
     c = out.comparison
     for msg in out.messages:
         print(msg)
