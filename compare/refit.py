@@ -6,18 +6,26 @@ at grade 7.0 (the missing housing mode changes the pitch error's sidebands near 
 fitted again once the housing mode is in the model, 8.0-8.5. So after an addition every earlier effect can be
 fitted again, one at a time: the model without it is the baseline, the effect the only candidate, with the
 attribution's search (:func:`compare.attribution.attribute`: its own parameters, bounded; the model's other
-effects and drive train as they are). A refit is kept only where it lowers the model's error; the effect keeps
-its place in the model (effects draw their random streams by position).
+effects and drive train as they are). A refit is kept only where it lowers the model's error by at least
+:data:`MIN_GAIN` of it: the search is global, and on the independent simulator
+(experiments/foreign_rig_check.py, torque fluctuation at 37 Hz) it replaced a right speed fluctuation at 36.6 Hz
+by one at 446 Hz for 3 % of the error. The effect keeps its place in the model (effects draw their random streams
+by position).
 """
 from __future__ import annotations
 
 from dataclasses import replace
 
+#: a refit is kept when it lowers the model's total error by at least this fraction of it: less than a new effect
+#: must explain to be claimed (compare.candidates.AttributionSettings.claim_reduction, 0.30), since the effect is
+#: already known to be there; the two-effect rig's pitch error gains 22 % (1.25 -> 0.98 dB), the 446 Hz swap 3 %
+MIN_GAIN = 0.10
+
 
 def refit_effects(measurement, model, names=None, *, reference=None, settings=None, parallel: bool = True):
     """Refit the effects ``names`` (default: all) of ``model`` on ``measurement``, in the model's order.
 
-    Returns ``(model, notes)``: the model with the refits that lowered its error, and per effect a dict with
+    Returns ``(model, notes)``: the model with the refits that lowered its error by :data:`MIN_GAIN`, and per effect a dict with
     ``effect``, ``before`` and ``after`` (its parameters), ``error_before_db``, ``error_after_db`` (the model's
     total error with the old and the refitted parameters) and ``kept``.
     """
@@ -46,7 +54,7 @@ def refit_effects(measurement, model, names=None, *, reference=None, settings=No
         trial = replace(model, effects=model.effects[:pos] + (new,) + model.effects[pos + 1:])
         after = compare(measurement, trial, reference=ref)
         e0, e1 = float(current.error_db["total"]), float(after.error_db["total"])
-        kept = e1 < e0
+        kept = e1 <= (1.0 - MIN_GAIN) * e0
         notes.append({"effect": name, "before": old.params(), "after": new.params(), "error_before_db": e0,
                       "error_after_db": e1, "kept": kept})
         if kept:
