@@ -62,4 +62,10 @@ def refit_effects(measurement, model, names=None, *, reference=None, settings=No
     return model, notes
 
 
-__all__ = ["refit_effects"]
+def refit_message(note: dict) -> str:
+    """One line for a note of :func:`refit_effects`."""
+    return (f"refit {note['effect']}: {note['before']} -> {note['after']}: error {note['error_before_db']:.2f} -> "
+            f"{note['error_after_db']:.2f} dB" + ("" if note["kept"] else " (not kept)"))
+
+
+__all__ = ["refit_effects", "refit_message"]

@@ -254,7 +254,7 @@ def compare_loop(m, model=None, *, steps: int = 3, refit: bool = True, log=lambd
     from compare.comparison import prepare_reference
     from compare.escalation import compare_and_attribute
     from compare.model import ComparisonModel
-    from compare.refit import refit_effects
+    from compare.refit import refit_effects, refit_message
 
     ref = prepare_reference(m)
     model = model if model is not None else ComparisonModel()
@@ -282,8 +282,7 @@ def compare_loop(m, model=None, *, steps: int = 3, refit: bool = True, log=lambd
             model, notes = refit_effects(m, model, names=added, reference=ref)
             row["refits"] = notes
             for r in notes:
-                log(f"    refit {r['effect']}: {r['before']} -> {r['after']}: error {r['error_before_db']:.2f} -> "
-                    f"{r['error_after_db']:.2f} dB{'' if r['kept'] else ' (not kept)'}")
+                log("    " + refit_message(r))
         added.append(claimed.effect)
     final = calibrated_compare(m, model, reference=ref, calibrate_nuisances=False)
     return ledger, model, final

@@ -103,13 +103,11 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
             get(c)
     ref = prepare_reference(measurement)
     if refit:
-        from compare.refit import refit_effects
+        from compare.refit import refit_effects, refit_message
 
         model, notes = refit_effects(measurement, model, names=None if refit is True else list(refit), reference=ref,
                                      parallel=parallel)
-        for r in notes:
-            messages.append(f"refit {r['effect']}: {r['before']} -> {r['after']}: error {r['error_before_db']:.2f} -> "
-                            f"{r['error_after_db']:.2f} dB" + ("" if r["kept"] else " (not kept)"))
+        messages += [refit_message(r) for r in notes]
         changed = changed or any(r["kept"] for r in notes)
     if changed:
         model.save(mpath)

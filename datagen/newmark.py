@@ -194,7 +194,7 @@ def run_linear(batch: Batch, S0: np.ndarray, k: np.ndarray, c: np.ndarray, E: np
         Step ``i`` (1..N) is stored in row ``(i - 1 + store_shift) % N`` (1: row j = time j dt of a period).
     groups : int or None
         With ``groups = G`` the C cases are ``C / G`` records of ``G`` consecutive pieces each (the mesh
-        cycles of :func:`datagen.shooting._storing_pass`): ``traj`` is stored as (C / G, 3n, G, N) and
+        cycles of :func:`datagen.shooting._march`): ``traj`` is stored as (C / G, 3n, G, N) and
         ``force`` as (C / G, G, N), each record's pieces side by side in time.
 
     Returns

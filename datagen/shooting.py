@@ -101,10 +101,9 @@ def periodic_response(cases, P: int, n_c: int) -> list[Response]:
     # the iteration does not contract there) keeps the first pass, a consistent solution at the nominal rotation,
     # and says so (``angle_converged``); the time-stepped path (solver.method = "transient") follows the angle there
     converged = change <= ANGLE_TOL_CYCLES
-    if not converged.all():
-        bad = ~converged
-        traj, force, periodicity = traj.copy(), force.copy(), periodicity.copy()
-        traj[bad], force[bad], periodicity[bad] = first[0][bad], first[1][bad], first[2][bad]
+    traj = np.where(converged[:, None, None], traj, first[0])
+    force = np.where(converged[:, None], force, first[1])
+    periodicity = np.where(converged, periodicity, first[2])
     co = channel_coefficients(cases)
     omega = np.array([2 * np.pi * c.speed_rpm / 60.0 for c in cases])
     fine = channel_values(traj, force, omega[:, None], co)      # (C, n_ch, N), sample j at time j dt
@@ -190,24 +189,28 @@ def _cycle_maps(ops, f, c_m, mesh, n):
     return (Phi_q, p_q), inverse, np.bincount(case_of, minlength=C)
 
 
-def _fixed_point_starts(maps, inverse):
-    """Start states (C, P + 1, 2n) of every cycle of the periodic solution (the last = the first again): the
-    fixed point of the composed maps, then each cycle's map applied in turn."""
-    Phi_q, p_q = maps
+def _cyclic_states(Phi_q, inverse, add):
+    """States ``s`` (C, P + 1, 2n) around the period with ``s_{cy+1} = Phi_cy s_cy + add_cy`` and ``s_P = s_0``:
+    the fixed point of the composed maps, then each cycle's map applied in turn. ``add`` is (C, P, 2n)."""
     C, P = inverse.shape
-    n2 = p_q.shape[1]
+    n2 = add.shape[2]
     Phi = np.broadcast_to(np.eye(n2), (C, n2, n2)).copy()
-    p = np.zeros((C, n2))
+    r = np.zeros((C, n2))
     for cy in range(P):
         sel = inverse[:, cy]
         Phi = np.matmul(Phi_q[sel], Phi)
-        p = np.einsum("cij,cj->ci", Phi_q[sel], p) + p_q[sel]
-    starts = np.empty((C, P + 1, n2))
-    starts[:, 0] = np.linalg.solve(np.eye(n2)[None] - Phi, p[..., None])[..., 0]
+        r = np.einsum("cij,cj->ci", Phi_q[sel], r) + add[:, cy]
+    s = np.empty((C, P + 1, n2))
+    s[:, 0] = np.linalg.solve(np.eye(n2)[None] - Phi, r[..., None])[..., 0]
     for cy in range(P):
-        sel = inverse[:, cy]
-        starts[:, cy + 1] = np.einsum("cij,cj->ci", Phi_q[sel], starts[:, cy]) + p_q[sel]
-    return starts
+        s[:, cy + 1] = np.einsum("cij,cj->ci", Phi_q[inverse[:, cy]], s[:, cy]) + add[:, cy]
+    return s
+
+
+def _fixed_point_starts(maps, inverse):
+    """Start states (C, P + 1, 2n) of every cycle of the periodic solution (the last = the first again)."""
+    Phi_q, p_q = maps
+    return _cyclic_states(Phi_q, inverse, p_q[inverse])
 
 
 def _march(ops, f, c_m, mesh, starts):
@@ -252,8 +255,7 @@ def _reshoot(ops, f, c_m, mesh, starts, maps, inverse):
     step; the old maps close it by the factor their change makes (~1e-2 here).
     """
     Phi_q, _ = maps
-    C, P = inverse.shape
-    n2 = starts.shape[2]
+    P = inverse.shape[1]
     s = starts.copy()
     for _ in range(MAX_RESHOOT):
         traj, force, ends = _march(ops, f, c_m, mesh, s)
@@ -261,18 +263,5 @@ def _reshoot(ops, f, c_m, mesh, starts, maps, inverse):
         periodicity = _defect(s, ends)
         if np.all(periodicity <= RESHOOT_TOL):
             break
-        d = ends - s[:, 1:]                                              # (C, P, 2n)
-        Phi = np.broadcast_to(np.eye(n2), (C, n2, n2)).copy()
-        r = np.zeros((C, n2))
-        for cy in range(P):
-            sel = inverse[:, cy]
-            Phi = np.matmul(Phi_q[sel], Phi)
-            r = np.einsum("cij,cj->ci", Phi_q[sel], r) + d[:, cy]
-        delta = np.linalg.solve(np.eye(n2)[None] - Phi, r[..., None])[..., 0]
-        s[:, 0] += delta
-        for cy in range(P):
-            sel = inverse[:, cy]
-            delta = np.einsum("cij,cj->ci", Phi_q[sel], delta) + d[:, cy]
-            s[:, cy + 1] += delta
-        s[:, P] = s[:, 0]
+        s += _cyclic_states(Phi_q, inverse, ends - s[:, 1:])
     return traj, force, s, periodicity

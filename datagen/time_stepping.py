@@ -46,7 +46,8 @@ def transient_response(cases, R: int, n_discard: int) -> list[Response]:
     i_phi1 = cases[0].model.index("phi_1")
     # the mesh is read at the pinion's actual angle, or ("nominal") at its rotation plus the static wind-up
     dynamic = np.array([c.mesh_angle == "dynamic" for c in cases], dtype=float)
-    x_static = np.array([static_state(c)[1] for c in cases])
+    statics = [static_state(c) for c in cases]
+    x_static = np.array([s[1] for s in statics])
     i_phim, i_phib = cases[0].model.index("phi_m"), cases[0].model.index("phi_b")
     M_ratio = np.stack([c.model.M @ c.model.ratio for c in cases])            # (C, n)
     motor_torque = np.array([c.model.f_static[i_phim] for c in cases])
@@ -120,8 +121,7 @@ def transient_response(cases, R: int, n_discard: int) -> list[Response]:
         return newmark.solve_mesh_law(delta_lin, h, sig, dt, law)
 
     # start: static equilibrium under mean stiffness, consistent acceleration at t = 0
-    statics = [static_state(c) for c in cases]
-    x0 = np.array([s[1] for s in statics])
+    x0 = x_static
     k0, E0 = records.at(x0)
     f0 = np.zeros((C, n))
     f0[:, i_phim] = motor_torque
