@@ -69,7 +69,7 @@ def represent_batch(data: SignalSet, spec: ModelSpec, sl: slice, crops: tuple[fl
         known = {"tooth_profile": profile_of_difference(diff, int(zp)),
                  "tsa_diff_rms": np.sqrt(np.mean(diff ** 2, axis=1)) * np.asarray(part.signals, float).std(axis=1)}
     else:
-        x = represent_crops(part.signals, rep, fs_hz=part.fs_hz, crops=crops, shaft_hz=fr, mesh_cps=mc,
+        x = represent_crops(part.paired_signals() if rep.reference else part.signals, rep, fs_hz=part.fs_hz, crops=crops, shaft_hz=fr, mesh_cps=mc,
                             z_pinion=zp, z_wheel=zw)
     x = torch.from_numpy(x.reshape(-1, *x.shape[2:]))
     if not spec.operating_inputs:

@@ -13,6 +13,10 @@ gear pair, and a label table with one row per record. Columns used:
   value computed from the speed, for records whose sampling rate or tooth counts
   are unknown.
 
+A record may come with a *healthy reference* (``reference``): a recording of the same machine
+at the same operating point with no fault (a commissioning record), the same length, which
+models read the record against (:mod:`models.representations`, ``reference = true``).
+
 Where the records come from (a generated dataset, measurement files) is the job
 of :mod:`models.sources`.
 """
@@ -75,6 +79,8 @@ class SignalSet:
         Where the records came from (path or description), for reports.
     channel : str or None
         Which sensor channel the records are (dataset channel name), if known.
+    reference : ndarray or None, shape (n_records, n_samples)
+        Healthy reference of each record (module docstring), or None.
     """
 
     signals: np.ndarray
@@ -83,6 +89,7 @@ class SignalSet:
     labels: pd.DataFrame
     source: str = ""
     channel: str | None = None
+    reference: np.ndarray | None = None
 
     def __post_init__(self):
         x = self.signals
@@ -93,6 +100,9 @@ class SignalSet:
         if "speed_rpm" in self.labels:
             sp = self.labels["speed_rpm"].to_numpy(dtype=float)
             require(bool(np.all(np.isfinite(sp) & (sp > 0))), "speed_rpm", "non-positive", "speeds > 0 rpm")
+        r = self.reference
+        require(r is None or (isinstance(r, np.ndarray) and r.shape == x.shape), "reference",
+                getattr(r, "shape", type(r).__name__), f"None or an array of the records' shape {x.shape}")
 
     def __len__(self) -> int:
         return int(self.signals.shape[0])
@@ -106,7 +116,16 @@ class SignalSet:
         idx = np.asarray(idx)
         return SignalSet(np.asarray(self.signals[idx]), self.fs_hz, self.pair,
                          self.labels.iloc[idx].reset_index(drop=True), self.source,
-                         self.channel)
+                         self.channel, None if self.reference is None else np.asarray(self.reference[idx]))
+
+    def paired_signals(self, idx=None) -> np.ndarray:
+        """Each record followed by its reference, ``(n, 2 n_samples)``: what a representation read against the
+        reference takes (:mod:`models.representations`); ``idx``: those records only."""
+        require(self.reference is not None, "reference", None,
+                "a healthy reference for every record (a model read against a reference needs one: a dataset "
+                "generated with [output] healthy_reference = true, or a sidecar key 'reference')")
+        sl = slice(None) if idx is None else idx
+        return np.concatenate([self.signals[sl], self.reference[sl]], axis=1)
 
     def shaft_hz(self) -> np.ndarray | None:
         """Pinion shaft frequency (Hz) per record, or None without a ``speed_rpm`` column."""
@@ -160,7 +179,7 @@ class SignalSet:
             damaged = lab["severity"].to_numpy(dtype=float) > 0
         lab["severity_class"] = np.where(damaged, BINARY_CLASSES[1], BINARY_CLASSES[0])
         lab["severity_class_index"] = damaged.astype(int)
-        return SignalSet(self.signals, self.fs_hz, self.pair, lab, self.source, self.channel)
+        return SignalSet(self.signals, self.fs_hz, self.pair, lab, self.source, self.channel, self.reference)
 
 
 def concat(sets: list[SignalSet]) -> SignalSet:
@@ -171,5 +190,9 @@ def concat(sets: list[SignalSet]) -> SignalSet:
         require(s.fs_hz == first.fs_hz, "fs_hz", s.fs_hz, f"{first.fs_hz} (all sets alike)")
         require(s.pair == first.pair, "pair", s.pair.name, f"{first.pair.name} (all sets alike)")
         require(s.n_samples == first.n_samples, "n_samples", s.n_samples, f"{first.n_samples} (all sets alike)")
+    refs = [s.reference is not None for s in sets]
+    require(all(refs) or not any(refs), "reference", f"{sum(refs)} of {len(sets)} sets",
+            "a reference in every set or in none")
     return SignalSet(np.concatenate([s.signals for s in sets]), first.fs_hz, first.pair,
-                     pd.concat([s.labels for s in sets], ignore_index=True), first.source, first.channel)
+                     pd.concat([s.labels for s in sets], ignore_index=True), first.source, first.channel,
+                     np.concatenate([s.reference for s in sets]) if all(refs) else None)

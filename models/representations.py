@@ -45,6 +45,16 @@ same size.
     Needs only the mesh frequency in cycles per sample, which can be estimated
     from a record whose sampling rate and tooth counts are unknown.
 
+With ``reference = True`` (``order`` and ``mesh_order`` only) each record comes with a *healthy reference*:
+a recording of the same machine at the same operating point before the fault (a commissioning record, the
+same gearbox last month). The records given to the representation are then *pairs*, the record followed by
+its reference (:meth:`models.data.SignalSet.paired_signals`, ``2 n_samples`` samples), and the two channels are
+``log10`` of the record's spectrum over the reference's (both scaled by the reference's standard deviation,
+the reference's spectrum averaged over all its segments), clipped to +/- :data:`REFERENCE_CLIP`, not
+standardised: the change since the reference in decades. What the machine adds to every record alike (the
+sensor's gain and mounting, the housing's transfer function, the gear's own tooth-to-tooth spacing and
+profile errors, its eccentricity) is a factor of both spectra and cancels; what the fault changes remains [5]_.
+
 Spectra are window-corrected Hann amplitude spectra, linearly interpolated from
 the FFT bins onto the order grid (a segment holds a whole number of
 revolutions up to rounding to a sample, so bins and grid nearly coincide),
@@ -65,6 +75,8 @@ References
 .. [3] Lebold, M. et al. (2000). Review of vibration analysis methods for gearbox
    diagnostics and prognostics. Proc. 54th MFPT, 623-634 (regular, residual and
    difference signals).
+.. [5] Randall, R. B. (2011), section 5.2.2: spectrum comparison with a reference ("baseline") spectrum of the
+   same machine, the first step of condition monitoring in practice.
 .. [4] Welch, P. D. (1967). The use of fast Fourier transform for the estimation
    of power spectra. IEEE Transactions on Audio and Electroacoustics 15(2), 70-73.
 """
@@ -86,6 +98,11 @@ KINDS: tuple[str, ...] = ("raw", "envelope", "tsa", "order", "mesh_order")
 #: representations whose axis is tied to the sampling rate (input fs must equal the trained fs)
 FS_BOUND: tuple[str, ...] = ("raw", "envelope")
 LOG_FLOOR = 1e-5
+#: largest change of a referenced channel, decades either way (40 dB): beyond it, the record or the reference
+#: has no content at that order (noise floor over a dead band), and the ratio says nothing
+REFERENCE_CLIP = 2.0
+#: representations that can be read relative to a healthy reference
+REFERENCE_KINDS: tuple[str, ...] = ("order", "mesh_order")
 
 
 @dataclass(frozen=True)
@@ -115,6 +132,9 @@ class RepresentationSpec:
     remove_shaft_1x : bool
         ``tsa`` only: subtract the pinion's and the wheel's first shaft order
         from the record first.
+    reference : bool
+        ``order`` and ``mesh_order`` only: read each record relative to its
+        healthy reference (module docstring); the records are then pairs.
     """
 
     kind: Kind = "order"
@@ -126,6 +146,7 @@ class RepresentationSpec:
     lowpass_mesh_orders: float = 0.0
     highpass_orders: float = 0.0
     remove_shaft_1x: bool = False
+    reference: bool = False
 
     def __post_init__(self):
         require(self.kind in KINDS, "representation.kind", self.kind, "one of: " + ", ".join(KINDS))
@@ -146,6 +167,11 @@ class RepresentationSpec:
                 self.remove_shaft_1x, "true or false")
         require(not self.remove_shaft_1x or self.kind == "tsa", "representation.remove_shaft_1x",
                 self.remove_shaft_1x, f"false for representation {self.kind!r} (only 'tsa' removes shaft lines)")
+        require(isinstance(self.reference, (bool, np.bool_)), "representation.reference", self.reference,
+                "true or false")
+        require(not self.reference or self.kind in REFERENCE_KINDS, "representation.reference", self.reference,
+                f"false for representation {self.kind!r} (only " + ", ".join(REFERENCE_KINDS)
+                + " are read against a reference)")
 
     @classmethod
     def from_dict(cls, values: dict) -> "RepresentationSpec":
@@ -216,11 +242,13 @@ def _envelope(segs: np.ndarray) -> np.ndarray:
     return e - e.mean(axis=-1, keepdims=True)
 
 
-def _log_on_grid(amp: np.ndarray, bin_units: float, length: int, step: float) -> np.ndarray:
-    """Log amplitude interpolated from FFT bins (spacing ``bin_units``) onto ``k * step``, k < length."""
+def _log_on_grid(amp: np.ndarray, bin_units: float, length: int, step: float, standardise: bool = True) -> np.ndarray:
+    """Log amplitude interpolated from FFT bins (spacing ``bin_units``) onto ``k * step``, k < length
+    (standardised unless asked not to)."""
     grid = np.arange(length) * step
     src = np.arange(amp.size) * bin_units
-    return _standardise(np.log10(np.interp(grid, src, amp) + LOG_FLOOR))
+    v = np.log10(np.interp(grid, src, amp) + LOG_FLOOR)
+    return _standardise(v) if standardise else v
 
 
 def _mean_amplitudes(x: np.ndarray, n_seg: int, crop_starts: list[list[int]], envelope: bool) -> np.ndarray:
@@ -247,7 +275,15 @@ def _crops(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, shaft_hz: floa
     The work that does not depend on the start (normalisation, the stretched record of ``envelope``,
     the FFT plan of a segment length) is done once for all crops.
     """
-    x = _normalise(x.astype(float))
+    ref = None
+    if spec.reference:  # a pair: the record, then its reference, both scaled by the reference's spread
+        half = x.size // 2
+        x, ref = x[:half].astype(float), x[half:].astype(float)
+        x, ref = x - x.mean(), ref - ref.mean()
+        sd = ref.std()
+        x, ref = (x / sd, ref / sd) if sd > 0 else (x, ref)
+    else:
+        x = _normalise(x.astype(float))
     k = spec.kind
     n_seg = spec.segment_length(fs_hz, shaft_hz, mesh_cps, speed_factor)
     if k == "raw":
@@ -275,6 +311,15 @@ def _crops(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, shaft_hz: floa
     crop_starts = [_starts(x.size, n_seg, st, True) for st in starts]
     amp = _mean_amplitudes(x, n_seg, crop_starts, False)
     env = _mean_amplitudes(x, n_seg, crop_starts, True)
+    if ref is not None:
+        every = [_starts(ref.size, n_seg, 0.0, True)]
+        base = [_log_on_grid(_mean_amplitudes(ref, n_seg, every, e)[0], unit, spec.length, step, standardise=False)
+                for e in (False, True)]
+        return np.stack([np.stack([np.clip(_log_on_grid(a, unit, spec.length, step, standardise=False) - base[0],
+                                           -REFERENCE_CLIP, REFERENCE_CLIP),
+                                   np.clip(_log_on_grid(e, unit, spec.length, step, standardise=False) - base[1],
+                                           -REFERENCE_CLIP, REFERENCE_CLIP)])
+                         for a, e in zip(amp, env)])
     return np.stack([np.stack([_log_on_grid(a, unit, spec.length, step), _log_on_grid(e, unit, spec.length, step)])
                      for a, e in zip(amp, env)])
 
@@ -286,7 +331,8 @@ def represent(signals: np.ndarray, spec: RepresentationSpec, *, fs_hz: float, sh
     Parameters
     ----------
     signals : array_like, shape (n_records, n_samples)
-        Records sampled at ``fs_hz``.
+        Records sampled at ``fs_hz`` (with ``spec.reference``: pairs, each record followed by its healthy
+        reference of the same length, ``(n_records, 2 * n_samples)``).
     spec : RepresentationSpec
     fs_hz : float
         Sampling rate (Hz); for ``mesh_order`` any positive value (unused).
@@ -359,7 +405,9 @@ def _represent(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, shaft_hz, 
     sf = _per_record(speed_factors, n, "speed_factors")
     require(bool(np.all((starts >= 0) & (starts <= 1))), "starts", "outside [0, 1]", "fractions in [0, 1]")
     require(bool(np.all(sf > 0)), "speed_factors", "non-positive", "factors > 0")
-    check_inputs(spec, x.shape[1], fs_hz, fr, mc, z_pinion=z_pinion,
+    require(not spec.reference or x.shape[1] % 2 == 0, "signals", x.shape,
+            "pairs of record and reference of equal length (SignalSet.paired_signals)")
+    check_inputs(spec, x.shape[1] // 2 if spec.reference else x.shape[1], fs_hz, fr, mc, z_pinion=z_pinion,
                  max_speed_factor=float(max(sf.max(), 1.0 / sf.min())), z_wheel=z_wheel)
     out = np.empty((n, starts.shape[1], spec.n_channels, spec.length), dtype=np.float32)
     z = int(z_pinion) if z_pinion is not None else 0

@@ -143,7 +143,8 @@ def check_input(spec: ModelSpec, data: SignalSet, *, allow_mismatch: bool = Fals
     ------
     InputError
         Different tooth counts or sampling rate (unless ``allow_mismatch`` and the
-        representation can be computed anyway), records too short for one
+        representation can be computed anyway), no healthy reference for a model read against one, records too
+        short for one
         segment, a speed missing where the representation needs it, a channel of another physical
         quantity than the trained one (when both names carry a unit, :func:`channel_quantity`).
     """
@@ -170,6 +171,11 @@ def check_input(spec: ModelSpec, data: SignalSet, *, allow_mismatch: bool = Fals
                              + ("" if kind in FS_BOUND else ", or allow_mismatch"))
         common.append(msg)
     if spec.model_type == "cnn":
+        if spec.representation.get("reference"):
+            require(data.reference is not None, "reference", None,
+                    "a healthy reference for every record: this model reads each record against a recording of the "
+                    "same machine at the same operating point without the fault (sidecar key 'reference', or a "
+                    "dataset generated with [output] healthy_reference = true)")
         check_inputs(spec.representation_spec(), data.n_samples, data.fs_hz, data.shaft_hz(), data.mesh_cps(),
                      z_pinion=data.pair.z_pinion or None, z_wheel=data.pair.z_wheel or None)
         for col in spec.operating_inputs.get("columns", ()):

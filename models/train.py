@@ -211,6 +211,8 @@ def train_cnn(data: SignalSet, config: TrainConfig = TrainConfig(), *, log=None)
     require(data.has_labels() and data.has_teeth_labels(), "labels", list(data.labels.columns),
             "severity_class and teeth_class (or n_pitted_teeth) columns")
     rep: RepresentationSpec = config.representation
+    if rep.reference:
+        data.paired_signals(slice(0, 1))   # refused, naming the field, when the records have no reference
     # validate before any work: every record must give a segment, with the speed-error margin
     check_inputs(rep, data.n_samples, data.fs_hz, data.shaft_hz(), data.mesh_cps(), z_pinion=data.pair.z_pinion or None,
                  z_wheel=data.pair.z_wheel or None,
@@ -237,7 +239,8 @@ def train_cnn(data: SignalSet, config: TrainConfig = TrainConfig(), *, log=None)
     side_all = operating_features(data, spec.operating_inputs)
     fr, mc, z = data.shaft_hz(), data.mesh_cps(), data.pair.z_pinion or None
     zw = data.pair.z_wheel or None
-    x_val = torch.from_numpy(represent(data.signals[va], rep, fs_hz=data.fs_hz,
+    records = (lambda idx: data.paired_signals(idx)) if rep.reference else (lambda idx: data.signals[idx])
+    x_val = torch.from_numpy(represent(records(va), rep, fs_hz=data.fs_hz,
                                        shaft_hz=None if fr is None else fr[va], mesh_cps=None if mc is None else mc[va],
                                        z_pinion=z, starts=0.5, z_wheel=zw))
     yv = [torch.from_numpy(a[va]) for a in (y_cls, y_sev, y_teeth)]
@@ -263,7 +266,8 @@ def train_cnn(data: SignalSet, config: TrainConfig = TrainConfig(), *, log=None)
             total, n_seen = 0.0, 0
 
             def batch(b, rng=rng):
-                xb, starts, speed = augment_batch(data.signals[b], config.augment, rng, fs_hz=data.fs_hz)
+                # a pair (record, reference) is augmented as one record: the same gain, polarity, filters, speed
+                xb, starts, speed = augment_batch(records(b), config.augment, rng, fs_hz=data.fs_hz)
                 return torch.from_numpy(represent(xb, rep, fs_hz=data.fs_hz, shaft_hz=None if fr is None else fr[b],
                                                   mesh_cps=None if mc is None else mc[b], z_pinion=z, starts=starts,
                                                   speed_factors=speed, z_wheel=zw))
