@@ -66,7 +66,7 @@ def build_metadata(sweep) -> dict:
     return {"format": "gearpit-dataset", "format_version": FORMAT_VERSION, "name": sweep.name, "seed": sweep.seed,
             "fingerprint": sweep.fingerprint, "software": software_versions(), "config": sweep.source,
             "n_samples": sweep.n_samples, "shard_size": sweep.shard_size, "n_shards": sweep.n_shards,
-            "channels": list(sweep.channels), "fs_hz": sweep.fs_hz, "n_time": sweep.n_time, "dtype": "float32",
+            "channels": list(sweep.stored_channels), "fs_hz": sweep.fs_hz, "n_time": sweep.n_time, "dtype": "float32",
             "pairs": {p.name: {"z_pinion": p.pinion.teeth, "z_wheel": p.wheel.teeth} for p in sweep.pairs},
             "classes": [asdict(c) for c in class_grid(sweep)], "samples_per_class": sweep.samples_per_class,
             "severity_bins": {b.name: [b.min_fraction, b.max_fraction] for b in sweep.severity_bins},

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from datagen import dataset
-from datagen.sampling import build_pit_map, draw_sample, sample_row
+from datagen.sampling import build_pit_map, draw_sample, healthy_twin, sample_row
 from datagen.sweep import Sweep
 from gearpit.errors import require
 
@@ -73,12 +73,19 @@ def compute_shard(sweep: Sweep, shard: int) -> ShardResult:
         specs = [draw_sample(sweep, i) for i in shard_samples(sweep, shard)]
         maps = [build_pit_map(sweep, s) for s in specs]
         signals = simulate_batch([build_case(sweep, s, m) for s, m in zip(specs, maps)])
-    out = np.empty((len(specs), len(sweep.channels), sweep.n_time), np.float32)
-    for j, sig in enumerate(signals):
+        if sweep.healthy_reference:
+            # each sample's healthy twin, in a batch of their own: a batch shares its solver passes (they stop
+            # when every case of the batch has converged), so with the twins beside them the records would move
+            # (~1e-3 of their RMS) from what the sweep without twins stores
+            signals += simulate_batch([build_case(sweep, healthy_twin(sweep, s), None) for s in specs])
+    n_ch = len(sweep.channels)
+    out = np.empty((len(specs), len(sweep.stored_channels), sweep.n_time), np.float32)
+    for k, sig in enumerate(signals):
+        j, twin = k % len(specs), k // len(specs)
         for c, name in enumerate(sweep.channels):
             x = sig.channels[name]
             require(x.size == sweep.n_time, f"sample {specs[j].index} {name}", x.size, f"{sweep.n_time} samples")
-            out[j, c] = x
+            out[j, c + twin * n_ch] = x
     bad = ~np.isfinite(out).all(axis=(1, 2))
     require(not bad.any(), "samples", [specs[j].index for j in np.nonzero(bad)[0]],
             "finite signals (the simulation of these samples diverged)")

@@ -18,7 +18,7 @@ pit generator lands within ``tol``) stays inside the bin.
 from __future__ import annotations
 
 import zlib
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -27,7 +27,7 @@ from datagen.pits import make_pit_map
 from datagen.sweep import HEALTHY_SHAPE, ClassKey, Sweep, class_grid
 
 #: spawn-key streams of one sample
-STREAM_OPERATING, STREAM_PITS, STREAM_DRIVE_TRAIN, STREAM_SIMULATION, STREAM_EFFECTS = range(5)
+STREAM_OPERATING, STREAM_PITS, STREAM_DRIVE_TRAIN, STREAM_SIMULATION, STREAM_EFFECTS, STREAM_REFERENCE = range(6)
 #: margin of the target severities inside their bin, in units of the generator tolerance
 BIN_MARGIN = 1.1
 
@@ -141,6 +141,16 @@ def effect_column(effect: str, parameter: str) -> str:
     return f"{effect}_{parameter}"
 
 
+def reference_seed(sweep: Sweep, spec: SampleSpec) -> int:
+    """Simulation seed of a sample's healthy twin (``[sweep] healthy_reference``): its own stream."""
+    return int(sample_rng(sweep.seed, spec.index, STREAM_REFERENCE).integers(2**31))
+
+
+def healthy_twin(sweep: Sweep, spec: SampleSpec) -> SampleSpec:
+    """The sample without its pits, simulated from :func:`reference_seed` (everything else as drawn)."""
+    return replace(spec, teeth=(), target_severity=(), simulation_seed=reference_seed(sweep, spec))
+
+
 def sample_row(sweep: Sweep, spec: SampleSpec, pit_map: PitMap) -> dict:
     """The index row of a sample: labels (from the achieved pit map) and every drawn parameter."""
     achieved = [pit_map.severity(t) for t in spec.teeth]
@@ -159,6 +169,8 @@ def sample_row(sweep: Sweep, spec: SampleSpec, pit_map: PitMap) -> dict:
         "speed_rpm": spec.speed_rpm, "torque_nm": spec.torque_nm, "fs_hz": sweep.fs_hz,
         "duration_s": sweep.duration_s, "simulation_seed": spec.simulation_seed,
     }
+    if sweep.healthy_reference:
+        row["reference_simulation_seed"] = reference_seed(sweep, spec)
     params = {name: dict(values) for name, values in spec.effects}
     row["snr_db"] = float(params["noise"].get("snr_db", np.inf)) if "noise" in params else np.inf
     for name, values in spec.effects:

@@ -18,6 +18,7 @@ are errors)::
     duration_s = 1.0
     pairs = ["spur-gds"]                # preset names or {preset = ..., ...} tables
     channels = ["acc_pinion_loa_m_s2"]  # stored signal channels
+    healthy_reference = false           # also store each sample's healthy twin (channels "<name>@reference")
 
     [classes]
     shapes = ["ellipse", "rectangle", "cluster"]
@@ -54,6 +55,12 @@ fields), a set of levels drawn with equal probability (``{choices = [600.0,
 Discrete speed levels are also faster: the simulator batches cases that share
 a time grid, i.e. a speed (:func:`datagen.dynamics.solve`).
 
+Healthy references: with ``healthy_reference = true`` every sample is simulated a second time without its
+pits (the same pair, operating point, effects and drive train; the noise and any other random draw of the
+simulation from another seed, ``reference_simulation_seed``), and stored as the channels
+``<channel>@reference``: the record a user would have of the same machine before the fault, which models read
+against (:mod:`models.representations`, ``reference = true``). It doubles the simulation time.
+
 Severity semantics: every pitted tooth of a sample gets its own severity,
 drawn uniformly in ``[min + 1.1 tol, max - 1.1 tol]`` of its bin (``tol`` = the pit
 generator's severity tolerance), so the *achieved* severity of every tooth,
@@ -81,7 +88,10 @@ from gearpit.tomlio import check_keys, read_toml
 FORMAT_VERSION = 1
 
 _TOP = {"sweep", "classes", "pits", "operating", "effects", "drive_train"}
-_SWEEP = {"name", "seed", "samples_per_class", "shard_size", "fs_hz", "duration_s", "pairs", "channels"}
+_SWEEP = {"name", "seed", "samples_per_class", "shard_size", "fs_hz", "duration_s", "pairs", "channels",
+          "healthy_reference"}
+#: suffix of the stored channels of the healthy twins (``healthy_reference = true``)
+REFERENCE_SUFFIX = "@reference"
 _CLASSES = {"shapes", "teeth", "max_pitted_teeth", "severity_bins"}
 _PITS = {"gear", "grid_px", "depth_mm", "aspect_w_to_s", "profiles", "tolerance"}
 _OPERATING = {"speed_rpm", "torque_nm"}
@@ -160,6 +170,12 @@ class Sweep:
     effects: tuple[tuple[str, tuple[Draw, ...]], ...]
     drive_train: tuple[Draw, ...]
     source: Mapping  # the TOML document as read (recorded in metadata.json)
+    healthy_reference: bool = False
+
+    @property
+    def stored_channels(self) -> tuple[str, ...]:
+        """The channels a shard stores: ``channels``, then (``healthy_reference``) their healthy twins."""
+        return self.channels + (tuple(c + REFERENCE_SUFFIX for c in self.channels) if self.healthy_reference else ())
 
     @property
     def n_time(self) -> int:
@@ -226,6 +242,8 @@ def sweep_from_dict(doc: Mapping) -> Sweep:
     require(round(fs * dur) >= 16, "sweep.duration_s", dur, f"at least 16 samples at fs_hz = {fs:g}")
     pairs = _pairs(sw["pairs"])
     channels = read_names(sw.get("channels", ["acc_pinion_loa_m_s2"]), "sweep.channels", CHANNELS)
+    twin = sw.get("healthy_reference", False)
+    require(isinstance(twin, bool), "sweep.healthy_reference", twin, "true or false")
 
     cl = _table(doc, "classes")
     check_keys(cl, _CLASSES, "classes", required={"severity_bins"})
@@ -265,7 +283,7 @@ def sweep_from_dict(doc: Mapping) -> Sweep:
                   duration_s=float(dur), pairs=pairs, channels=channels, shapes=shapes, severity_bins=bins,
                   teeth_classes=teeth, gear=gear, grid_px=(int(grid_px[0]), int(grid_px[1])), tolerance=tol,
                   depth_m=depth, aspect_w_to_s=aspect, profile=profile, speed_rpm=speed, torque_nm=torque,
-                  effects=effects, drive_train=drive, source=json.loads(json.dumps(doc)))
+                  effects=effects, drive_train=drive, source=json.loads(json.dumps(doc)), healthy_reference=twin)
     _check_feasible(sweep)
     return sweep
 

@@ -1,7 +1,8 @@
 """Where labelled records come from: a generated dataset or measurement files.
 
 - :func:`load_dataset`: a dataset directory of :mod:`datagen.dataset` (one
-  channel, one gear pair, optionally a subset of rows);
+  channel, one gear pair, optionally a subset of rows; the channel's healthy twins
+  as references where the dataset stores them, ``[sweep] healthy_reference``);
 - :func:`load_measurements`: measurement files with sidecars
   (:func:`compare.measurement.load_measurement`). Labels, when present, come from
   a ``labels.csv`` beside the files (columns ``file``, ``severity_class`` and any of
@@ -56,6 +57,7 @@ def load_dataset(path: str | Path, *, channel: str | None = None, pair: str | No
         Subset of the index rows (mask or positions), e.g. from a query on the index.
     """
     from datagen.dataset import load_index, load_signals, read_metadata
+    from datagen.sweep import REFERENCE_SUFFIX
 
     root = Path(path)
     meta = read_metadata(root)
@@ -79,12 +81,14 @@ def load_dataset(path: str | Path, *, channel: str | None = None, pair: str | No
     index = index[keep].reset_index(drop=True)
     require(len(index) > 0, "rows", 0, "at least one record of the selection")
     x = load_signals(root, index["sample_index"].to_numpy(), channel)
+    ch = channel if channel is not None else meta["channels"][0]
+    twin = ch + REFERENCE_SUFFIX
+    reference = load_signals(root, index["sample_index"].to_numpy(), twin) if twin in meta["channels"] else None
     labels = index.copy()
     if "teeth_class" not in labels and "n_pitted_teeth" in labels:
         labels["teeth_class"] = teeth_class_of(labels["n_pitted_teeth"])
-    ch = channel if channel is not None else meta["channels"][0]
     return SignalSet(x, float(meta["fs_hz"]), PairInfo(pair, int(pairs[pair]["z_pinion"]), int(pairs[pair]["z_wheel"])),
-                     labels, source=f"{root} [{ch}]", channel=ch)
+                     labels, source=f"{root} [{ch}]", channel=ch, reference=reference)
 
 
 def _labels_table(folder: Path) -> pd.DataFrame | None:

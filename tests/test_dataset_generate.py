@@ -254,3 +254,55 @@ def test_encoder_errors_change_only_the_transmission_error_by_their_shaft_lines(
                 - rb2 * r["shaft_encoder_error_wheel_rad"] * np.sin(th1 * 29 / 100 + r["shaft_encoder_error_wheel_phase_rad"]))
         tol = 1e-3 * np.abs(want).max() + 2 * np.finfo(np.float32).eps * np.abs(te[1][i]).max()
         assert np.abs(te[1][i] - te[0][i] - want).max() < tol, i
+
+
+def test_healthy_references_are_the_samples_twins_without_pits(reference, tmp_path):
+    """``[sweep] healthy_reference = true``: the records are unchanged (same bytes as without the twins), each
+    twin can be simulated again from its index row alone (the drawn effect values, the operating point and
+    ``reference_simulation_seed``, no pits; within 1 % of its RMS: a shard's cases share solver passes), a healthy sample and its twin differ by their two noise
+    draws only (residual RMS / record RMS = sqrt(2) 10^(-SNR/20) within 4 sigma of the sample-RMS scatter), and
+    the classifiers' reader attaches the twins as references."""
+    from datagen.effects import get
+    from datagen.geometry import preset
+    from datagen.sampling import effect_column
+    from datagen.simulate import Case, OperatingPoint, simulate
+    from models.sources import load_dataset
+
+    sw = sweep_from_dict(base(sweep__healthy_reference=True))
+    assert sw.stored_channels == ("acc_pinion_loa_m_s2", "tacho_pinion",
+                                  "acc_pinion_loa_m_s2@reference", "tacho_pinion@reference")
+    out = tmp_path / "twins"
+    generate(sw, out, progress=False)
+    rows = np.arange(sw.n_samples)
+    for ch in ("acc_pinion_loa_m_s2", "tacho_pinion"):
+        assert np.array_equal(dataset.load_signals(out, rows, ch), dataset.load_signals(reference, rows, ch))
+    index = dataset.load_index(out).sort_values("sample_index").reset_index(drop=True)
+    twins = dataset.load_signals(out, rows, "acc_pinion_loa_m_s2@reference")
+    records = dataset.load_signals(out, rows, "acc_pinion_loa_m_s2")
+    pitted = int(np.nonzero(index["n_pitted_teeth"].to_numpy() > 0)[0][0])
+    for i in (0, pitted):
+        row = index.iloc[i]
+        effects = tuple(get(name)(**{d.name: row[effect_column(name, d.name)] for d in draws})
+                        for name, draws in sw.effects)
+        case = Case(pair=preset("spur-gds"), operating=OperatingPoint(float(row.speed_rpm), float(row.torque_nm)),
+                    duration_s=sw.duration_s, fs_hz=sw.fs_hz, effects=effects,
+                    seed=int(row.reference_simulation_seed))
+        again = simulate([case])[0].channels["acc_pinion_loa_m_s2"]
+        # alone, not in its shard's batch (whose cases share their solver passes): within 1 % of the RMS, where
+        # another noise draw (SNR 20-30 dB: 3-10 % of the RMS) would not be
+        assert np.max(np.abs(again - twins[i])) < 0.01 * np.std(twins[i])
+    healthy = index["n_pitted_teeth"].to_numpy() == 0
+    snr = index["snr_db"].to_numpy()[healthy]
+    ratio = (records[healthy] - twins[healthy]).astype(float).std(axis=1) / records[healthy].std(axis=1)
+    ratio /= np.sqrt(2.0) * 10.0 ** (-snr / 20.0)
+    sigma = 1.0 / np.sqrt(2 * records.shape[1])
+    assert np.all(np.abs(ratio - 1.0) < 4 * sigma)
+    assert not np.array_equal(records[pitted], twins[pitted])
+    data = load_dataset(out)
+    assert np.array_equal(data.reference, twins[index.sample_index.to_numpy()])
+    assert load_dataset(reference).reference is None
+
+
+def test_healthy_reference_must_be_a_bool():
+    with pytest.raises(InputError, match="sweep.healthy_reference"):
+        sweep_from_dict(base(sweep__healthy_reference="yes"))
