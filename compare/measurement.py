@@ -23,6 +23,10 @@ key                        required  meaning
 ``variable``               no        NPZ/MAT variable to read when the file holds several
 ``format``                 no        one of :data:`compare.formats.FORMATS` (default ``"auto"``)
 ``start_s``, ``duration_s`` no       keep only this part of the record (s)
+``reference``              no        a healthy recording of the same machine at the same operating
+                                     point (a measurement file with its own sidecar, path relative
+                                     to this file's folder), for classifiers read against a
+                                     reference (:mod:`models.representations`, ``reference = true``)
 =========================  ========  ==========================================================
 
 .. [1] unless the file gives it (time column, WAV header, ``fs`` variable, a public layout).
@@ -47,7 +51,8 @@ from gearpit.errors import InputError, require, require_positive
 from gearpit.tomlio import check_keys, read_toml
 
 SIDECAR_KEYS = ("fs_hz", "speed_rpm", "torque_nm", "pair", "sensor", "tacho", "tacho_pulses_per_rev", "tacho_shaft",
-                "fault", "channels", "time_column", "variable", "format", "start_s", "duration_s", "secondary")
+                "fault", "channels", "time_column", "variable", "format", "start_s", "duration_s", "secondary",
+                "reference")
 SIDECAR_SUFFIXES = (".toml", ".json", ".meta.toml", ".meta.json")
 MIN_REVOLUTIONS = 2.0
 
@@ -72,6 +77,7 @@ class Sidecar:
     start_s: float = 0.0
     duration_s: float | None = None
     secondary: dict | None = None
+    reference: str | None = None
 
     @classmethod
     def from_dict(cls, d: dict, where: str = "sidecar") -> "Sidecar":
@@ -110,7 +116,7 @@ class Sidecar:
             require(isinstance(ch, list) and ch and all(isinstance(c, str) and c for c in ch)
                     and len(set(ch)) == len(ch), f"{where}.channels", ch, "a list of distinct channel names")
             kw["channels"] = tuple(ch)
-        for key in ("fault", "time_column", "variable"):
+        for key in ("fault", "time_column", "variable", "reference"):
             if key in d:
                 require(isinstance(d[key], str) and d[key] != "", f"{where}.{key}", d[key], "a non-empty string")
                 kw[key] = d[key]

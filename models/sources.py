@@ -8,7 +8,8 @@
   a ``labels.csv`` beside the files (columns ``file``, ``severity_class`` and any of
   ``severity``, ``n_pitted_teeth``, ``teeth_class``), else from the sidecar's
   ``fault`` (``"healthy"`` -> severity 0, no pitted teeth; any other value -> that
-  class name, counts unknown). Records are cut to the shortest one;
+  class name, counts unknown). A sidecar's ``reference`` (a healthy recording of the same machine) is loaded
+  the same way and resampled to its record's measured speed. Records are cut to the shortest one;
 - :func:`load_data`: either of the two, by looking at the path.
 
 The speed of a measurement (:func:`measured_speed`): the TSA and order representations average the record
@@ -121,6 +122,9 @@ def measurement_files(folder: str | Path) -> list[Path]:
     return out
 
 
+#: largest speed difference between a record and its healthy reference (fraction)
+MAX_REFERENCE_SPEED_OFFSET = 0.05
+
 #: the wider search that confirms the spectrum's speed, in units of the search half-width ``1 / (2 z1)``
 CONFIRM_WIDTH = 3.0
 
@@ -199,7 +203,8 @@ def load_measurements(paths: list[str | Path], *, refine_speed: bool = True) -> 
         rows.append({"file": f.name, "speed_rpm": speed, "torque_nm": float(m.torque_nm),
                      "speed_rpm_sidecar": float(m.speed_rpm), "speed_method": method, "speed_note": note,
                      "mesh_phase_dev_rad": dev, "order_tracked": bool(dev > TRACK_MIN_RAD)})
-    n = min(r.size for r in records)
+    refs = _references(ms, files, rows, refine_speed) if any(m.sidecar.reference for m in ms) else None
+    n = min(r.size for r in records + (refs or []))
     x = np.stack([np.asarray(r[:n], dtype=np.float32) for r in records])
     labels = pd.DataFrame(rows)
     tables = {f.parent: _labels_table(f.parent) for f in files}
@@ -223,7 +228,35 @@ def load_measurements(paths: list[str | Path], *, refine_speed: bool = True) -> 
             labels["n_pitted_teeth"] = 0
             labels["teeth_class"] = "0"
     return SignalSet(x, float(fs), pair_of[0], labels, source=", ".join(f.name for f in files[:3])
-                     + (f" (+{len(files) - 3})" if len(files) > 3 else ""))
+                     + (f" (+{len(files) - 3})" if len(files) > 3 else ""),
+                     reference=None if refs is None else np.stack([np.asarray(r[:n], np.float32) for r in refs]))
+
+
+def _references(ms: list, files: list[Path], rows: list[dict], refine_speed: bool) -> list[np.ndarray]:
+    """The healthy reference of every record (sidecar key ``reference``): loaded like the record (speed measured,
+    tracked), then resampled to the record's speed so that their shaft orders fall on the same bins."""
+    from scipy.signal import resample
+
+    from compare.measurement import load_measurement
+
+    out = []
+    for m, f, row in zip(ms, files, rows):
+        require(m.sidecar.reference is not None, f"{f.name}: reference", None,
+                "a reference in every sidecar or in none (records read against a reference need one each)")
+        p = f.parent / m.sidecar.reference
+        require(p.is_file(), f"{f.name}: reference", m.sidecar.reference,
+                f"an existing measurement file (relative to {f.parent})")
+        r = load_measurement(p)
+        require(np.isclose(r.fs_hz, m.fs_hz, rtol=1e-9), f"{p.name}: fs_hz", r.fs_hz,
+                f"{m.fs_hz:g} Hz (the record's)")
+        speed, method, _ = measured_speed(r) if refine_speed else (float(r.speed_rpm), "sidecar", "")
+        y, speed, _ = tracked_record(r, speed, method) if refine_speed else (r.signal, speed, np.nan)
+        factor = speed / row["speed_rpm"]           # > 1: the reference ran faster, stretch it
+        require(abs(factor - 1.0) <= MAX_REFERENCE_SPEED_OFFSET, f"{p.name}: speed_rpm", round(speed, 2),
+                f"within {100 * MAX_REFERENCE_SPEED_OFFSET:g} % of the record's {row['speed_rpm']:.2f} rpm "
+                "(a reference at the same operating point)")
+        out.append(resample(y, int(round(y.size * factor))) if abs(factor - 1.0) > 1e-6 else y)
+    return out
 
 
 def _pair_info(pair) -> PairInfo:

@@ -122,3 +122,63 @@ def test_bad_references_are_refused(machines):
         SignalSet(test.signals, test.fs_hz, test.pair, test.labels, reference=test.reference[:, :100])
     with pytest.raises(InputError, match="representation.reference"):
         RepresentationSpec(kind="tsa", reference=True)
+
+
+def _write_measurement(folder, name, speed_rpm, *, fault_depth=0.0, seed=0, reference=None, runout=0.15):
+    """A spur-gds-like toy record (29 teeth) as an NPZ + JSON sidecar; the sidecar states the speed 0.5 % off
+    (the loader measures it from the tachometer)."""
+    import json
+
+    from features.synthetic import gear_signal_example
+
+    sig = gear_signal_example(fs_hz=12800.0, duration_s=2.0, fr_pinion_hz=speed_rpm / 60.0, z_pinion=29, z_wheel=100,
+                              fault_depth=fault_depth, runout=runout, snr_db=30.0, seed=seed)
+    np.savez(folder / f"{name}.npz", acc=sig.x, tacho=sig.tacho)
+    meta = {"pair": "spur-gds", "speed_rpm": 1.005 * speed_rpm, "torque_nm": 50.0, "fs_hz": 12800.0,
+            "sensor": "acc", "tacho": "tacho", "fault": "healthy" if fault_depth == 0 else "pitted"}
+    if reference:
+        meta["reference"] = reference
+    (folder / f"{name}.json").write_text(json.dumps(meta))
+    return folder / f"{name}.npz"
+
+
+def test_a_sidecars_reference_is_loaded_and_brought_to_the_records_speed(tmp_path):
+    """Sidecar key ``reference``: the healthy recording, made at 1 % more speed than the record, is resampled to
+    the record's measured speed, so the healthy pair reads < 0.1 decade (median over the orders with content,
+    as above) and its first two mesh lines < 0.01 decade; without the resampling they sit 0.29 and 0.58 orders off
+    and read > 0.5 decade."""
+    from models.sources import load_measurements
+
+    ref = _write_measurement(tmp_path, "ref", 1010.0, seed=1)
+    rec = _write_measurement(tmp_path, "rec", 1000.0, seed=2, reference=ref.name)
+    d = load_measurements([rec])
+    assert d.reference is not None and d.reference.shape == d.signals.shape
+    rep = RepresentationSpec(kind="order", n_revs=8, max_order=60.0, reference=True)
+    r = represent(d.paired_signals(), rep, fs_hz=d.fs_hz, shaft_hz=d.shaft_hz())[0, 0]
+    base = represent(d.reference, RepresentationSpec(kind="order", n_revs=8, max_order=60.0), fs_hz=d.fs_hz,
+                     shaft_hz=d.shaft_hz())[0, 0]
+    assert np.median(np.abs(r[_content(base)])) < 0.1
+    mesh = np.array([29, 58]) * rep.n_revs              # the first two mesh lines
+    assert np.all(np.abs(r[mesh]) < 0.01)
+    # the same reference taken as it is (no resampling): the mesh lines do not line up (measured 1.1 and 2)
+    raw = load_measurements([ref])
+    n = min(raw.n_samples, d.n_samples)
+    off = represent(np.concatenate([d.signals[:, :n], raw.signals[:, :n]], axis=1), rep, fs_hz=d.fs_hz,
+                    shaft_hz=d.shaft_hz())[0, 0]
+    assert np.all(np.abs(off[mesh]) > 0.5)
+
+
+def test_bad_sidecar_references_are_refused(tmp_path):
+    from models.sources import load_measurements
+
+    ref = _write_measurement(tmp_path, "ref", 1000.0, seed=1)
+    a = _write_measurement(tmp_path, "a", 1000.0, seed=2, reference="missing.npz")
+    with pytest.raises(InputError, match="reference"):
+        load_measurements([a])
+    b = _write_measurement(tmp_path, "b", 1000.0, seed=3, reference=ref.name)
+    with pytest.raises(InputError, match="reference"):
+        load_measurements([b, ref])                        # one record with a reference, one without
+    fast = _write_measurement(tmp_path, "fast", 1100.0, seed=4)
+    c = _write_measurement(tmp_path, "c", 1000.0, seed=5, reference=fast.name)
+    with pytest.raises(InputError, match="speed_rpm"):
+        load_measurements([c])                             # 10 % faster: not the same operating point
