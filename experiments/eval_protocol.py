@@ -120,7 +120,8 @@ def dataset(name: str, data_dir: Path, channel: str | None = None) -> SignalSet:
         read_metadata(out)
         parts.append(load_dataset(out, channel=channel))
     d = concat(parts)
-    return SignalSet(d.signals, d.fs_hz, d.pair, d.labels, source=f"{name} (+{name}_healthy)", channel=d.channel)
+    return SignalSet(d.signals, d.fs_hz, d.pair, d.labels, source=f"{name} (+{name}_healthy)", channel=d.channel,
+                     reference=d.reference)
 
 
 def features(name: str, data: SignalSet, jobs: int) -> tuple[np.ndarray, list[str], dict]:

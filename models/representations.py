@@ -45,7 +45,7 @@ same size.
     Needs only the mesh frequency in cycles per sample, which can be estimated
     from a record whose sampling rate and tooth counts are unknown.
 
-With ``reference = True`` (``order`` and ``mesh_order`` only) each record comes with a *healthy reference*:
+With ``reference = True`` each record comes with a *healthy reference*:
 a recording of the same machine at the same operating point before the fault (a commissioning record, the
 same gearbox last month). The records given to the representation are then *pairs*, the record followed by
 its reference (:meth:`models.data.SignalSet.paired_signals`, ``2 n_samples`` samples), and the two channels are
@@ -54,6 +54,11 @@ the reference's spectrum averaged over all its segments), clipped to +/- :data:`
 standardised: the change since the reference in decades. What the machine adds to every record alike (the
 sensor's gain and mounting, the housing's transfer function, the gear's own tooth-to-tooth spacing and
 profile errors, its eccentricity) is a factor of both spectra and cancels; what the fault changes remains [5]_.
+For ``tsa`` the two channels are the record's TSA and its *residual*: the TSA less the reference's, turned to the
+angle where the two correlate best (a reference starts at another angle), both over the reference TSA's standard
+deviation. The residual holds what the fault adds to the mesh vibration, also where the machine's own deviations
+excite the same orders (a log ratio of spectra cannot undo a sum of two complex amplitudes; a difference of
+synchronous averages can); a sensor gain that changed between the two recordings does not cancel in it.
 
 Spectra are window-corrected Hann amplitude spectra, linearly interpolated from
 the FFT bins onto the order grid (a segment holds a whole number of
@@ -91,7 +96,7 @@ from scipy.signal import resample
 from gearpit.errors import InputError, require, require_positive
 from models.input_checks import check_inputs
 from models.segments import _normalise, _per_record, _starts
-from models.tsa import _tsa_comb, _tsa_normalised
+from models.tsa import _tsa_comb, _tsa_normalised, tsa_against_reference
 
 Kind = Literal["raw", "envelope", "tsa", "order", "mesh_order"]
 KINDS: tuple[str, ...] = ("raw", "envelope", "tsa", "order", "mesh_order")
@@ -102,7 +107,7 @@ LOG_FLOOR = 1e-5
 #: has no content at that order (noise floor over a dead band), and the ratio says nothing
 REFERENCE_CLIP = 2.0
 #: representations that can be read relative to a healthy reference
-REFERENCE_KINDS: tuple[str, ...] = ("order", "mesh_order")
+REFERENCE_KINDS: tuple[str, ...] = ("order", "mesh_order", "tsa")
 
 
 @dataclass(frozen=True)
@@ -133,8 +138,8 @@ class RepresentationSpec:
         ``tsa`` only: subtract the pinion's and the wheel's first shaft order
         from the record first.
     reference : bool
-        ``order`` and ``mesh_order`` only: read each record relative to its
-        healthy reference (module docstring); the records are then pairs.
+        Read each record relative to its healthy reference (module docstring;
+        ``order``, ``mesh_order``, ``tsa``); the records are then pairs.
     """
 
     kind: Kind = "order"
@@ -300,6 +305,9 @@ def _crops(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, shaft_hz: floa
         return np.stack([_standardise(np.log10(a[:spec.length] + LOG_FLOOR))[None, :] for a in amp])
     if k == "tsa":
         comb = _tsa_comb(x, spec, fs_hz, shaft_hz * speed_factor, starts, z_pinion, z_wheel)
+        if ref is not None:
+            ref_comb = _tsa_comb(ref, spec, fs_hz, shaft_hz * speed_factor, (0.0,), z_pinion, z_wheel)[0]
+            return tsa_against_reference(comb, ref_comb, spec.samples_per_rev)
         return _tsa_normalised(comb, spec.samples_per_rev, z_pinion)[0]
     if k == "order":
         # bin j of the segment is shaft order j * (revolutions in the segment)^-1

@@ -145,6 +145,42 @@ def _tsa_normalised(comb: np.ndarray, samples_per_rev: int, z_pinion: int) -> tu
                      (diff - diff.mean(axis=-1, keepdims=True)) / sd], axis=1), diff
 
 
+#: fine grid of the angle alignment of a reference's TSA, points per sample of the revolution
+ALIGN_OVERSAMPLING = 8
+
+
+def align_comb(comb: np.ndarray, ref: np.ndarray) -> np.ndarray:
+    """``ref`` (a TSA comb, orders 0 .. K) turned in angle to line up with each row of ``comb``: the shift ``d``
+    that maximises the circular cross-correlation ``Re sum_k comb_k conj(ref_k) e^{i k d}`` (on a grid of
+    ``ALIGN_OVERSAMPLING`` points per TSA sample, refined by a parabola through the peak and its neighbours),
+    applied as ``ref_k e^{-i k d}``: ``(n_rows, K + 1)``. A reference recorded at another start angle (another
+    file, another crop) then subtracts from the record order by order."""
+    rows = np.atleast_2d(comb)
+    k = np.arange(ref.size)
+    n = ALIGN_OVERSAMPLING * 2 * (ref.size - 1)
+    r = np.fft.irfft(rows * np.conj(ref)[None, :], n=n, axis=-1)          # r[j] at shift 2 pi j / n
+    j = np.argmax(r, axis=-1)
+    lo, mid, hi = (r[np.arange(r.shape[0]), (j + o) % n] for o in (-1, 0, 1))
+    curv = lo - 2 * mid + hi
+    frac = np.where(curv < 0, 0.5 * (lo - hi) / np.where(curv < 0, curv, -1.0), 0.0)
+    d = 2 * np.pi * (j + frac) / n
+    return ref[None, :] * np.exp(-1j * k[None, :] * d[:, None])
+
+
+def tsa_against_reference(comb: np.ndarray, ref_comb: np.ndarray, samples_per_rev: int) -> np.ndarray:
+    """The ``tsa`` representation read against a reference (:mod:`models.representations`): for each crop's
+    comb, the record's TSA and its residual, the TSA less the reference's aligned one (:func:`align_comb`),
+    both over the reference TSA's standard deviation: ``(n_crops, 2, samples_per_rev)``."""
+    aligned = align_comb(comb, ref_comb)
+    ref_avg = np.fft.irfft(ref_comb, n=samples_per_rev)
+    sd = ref_avg.std()
+    sd = sd if sd > 0 else 1.0
+    avg = np.fft.irfft(comb, n=samples_per_rev, axis=-1)
+    res = np.fft.irfft(comb - aligned, n=samples_per_rev, axis=-1)
+    return np.stack([(avg - avg.mean(axis=-1, keepdims=True)) / sd, (res - res.mean(axis=-1, keepdims=True)) / sd],
+                    axis=1)
+
+
 def tsa_difference(signals: np.ndarray, spec: RepresentationSpec, *, fs_hz: float, shaft_hz, z_pinion: int,
                    z_wheel: int | None = None) -> np.ndarray:
     """The TSA difference signal of every record in the record's own unit (not normalised), from the segment

@@ -77,6 +77,7 @@ class ForeignRig:
     gain: float = 2.0                    # sensor sensitivity (unknown to the comparison)
     snr_db: float | None = 30.0
     seed: int = 0
+    noise_seed: int | None = None        # seed of the noise and the bearing defect's timing (None: seed)
     # effects (all off by default)
     eccentricity_m: tuple = (0.0, 0.0)   # pinion, wheel (offset of the pitch circle from the axis)
     pitch_fp_m: float = 0.0              # pinion cumulative pitch deviation range F_p (random walk, closed)
@@ -245,7 +246,7 @@ def simulate_foreign(r: ForeignRig) -> dict:
         _, y, _ = signal.lsim(sys_h, y, t_out)
     if r.bearing_defect is not None:
         fd, fr_hz, amp = r.bearing_defect
-        rng = np.random.default_rng([r.seed, 3])
+        rng = np.random.default_rng([r.seed if r.noise_seed is None else r.noise_seed, 3])
         times = np.arange(0.0, t_out[-1], 1 / fd) + 1e-3 * rng.random()
         ring = np.zeros_like(y)
         for t0 in times:
@@ -256,7 +257,7 @@ def simulate_foreign(r: ForeignRig) -> dict:
     keep = slice(int(round(r.settle_s * fs)), None)
     y = r.gain * y[keep]
     if r.snr_db is not None:
-        rng = np.random.default_rng([r.seed, 11])
+        rng = np.random.default_rng([r.seed if r.noise_seed is None else r.noise_seed, 11])
         y = y + np.std(y) * 10 ** (-r.snr_db / 20) * rng.standard_normal(y.size)
     phi_out = phi1[0:2 * n:2 * over][: t_out.size][keep]
     tacho = np.where(np.mod(phi_out, 2 * math.pi) < 0.1 * 2 * math.pi, 5.0, 0.0)

@@ -26,6 +26,9 @@ def register(sub) -> None:
     p.add_argument("--model", choices=("cnn", "logreg", "rf", "gb"), default="cnn", help="model type (default cnn)")
     p.add_argument("--config", type=Path, default=None, help="TOML with a [train] table (CNN options)")
     p.add_argument("--representation", choices=KINDS, default=None, help="CNN input representation (default order)")
+    p.add_argument("--reference", action="store_true",
+                   help="read each record against its healthy reference (order / mesh_order; a dataset generated "
+                        "with [sweep] healthy_reference = true)")
     p.add_argument("--task", choices=("multi", "binary"), default=None, help="severity classes or healthy/damaged")
     p.add_argument("--channel", default=None, help="dataset channel (default: the first stored)")
     p.add_argument("--pair", default=None, help="gear pair of the dataset to use (if it holds several)")
@@ -50,6 +53,8 @@ def train_config_from(args):
         rep = dict(values.get("representation", {}))
         rep["kind"] = args.representation
         values["representation"] = rep
+    if getattr(args, "reference", False):
+        values["representation"] = {**dict(values.get("representation", {})), "reference": True}
     for flag, key in (("task", "task"), ("epochs", "max_epochs"), ("seed", "seed")):
         v = getattr(args, flag)
         if v is not None:

@@ -1,0 +1,174 @@
+"""Classifiers read against a healthy reference of the same machine: in-domain, on another simulator, on real data.
+
+Run: ``python experiments/reference_check.py [--records N] [--seed S] [--skip PART ...]``. The last line is JSON.
+
+Every classifier of ``experiments/eval_protocol.py`` reads a record alone, and two things defeat it that a
+record alone cannot settle (``experiments/RESULTS.md``): a healthy gear's own random tooth-to-tooth spacing
+errors look like pitting (``default_pitch``: 68 / 67 % in-domain on the accelerometer), and another simulator's
+gear looks pitted to a model trained on ours (30 / 31 %). A user who monitors a machine has what removes both:
+a recording of the same machine before the fault. ``reference = true`` (:mod:`models.representations`) reads
+the log ratio of the record's order spectrum to the reference's, in which the machine's own spacing errors,
+eccentricity, sensor gain and housing path cancel.
+
+Parts (each on the housing accelerometer ``acc_pinion_loa_m_s2``):
+
+1. **in-domain**: ``experiments/models_sweeps/default_pitch_ref{,_healthy}.toml`` (``default_pitch`` with each
+   sample's healthy twin, ``[sweep] healthy_reference = true``); the protocol's stratified 70/30 split; the
+   order-spectrum CNN read against the reference (``order_ref``) beside the same CNN on the record alone
+   (``order``), same records, same split, same training settings.
+2. **another simulator**: the records of ``experiments/foreign_classifier_check.py`` (``tests/foreign_rig.py``:
+   ISO 6336 stiffness, 3-DOF model, RK4; random-walk pitch errors of 5-15 um), each with its healthy twin (the
+   same rig without pits, other noise) as the sidecar's ``reference``, read through the user's path
+   (:func:`models.sources.load_measurements`, speed from the tachometer).
+3. **real data**: SpectraQuest (``../shared/data/spectraquest_gfd``, healthy vs broken tooth, 30 Hz, loads 0-90 %;
+   sampling rate undocumented, so the mesh-order CNN ``mesh_order_ref``, binary, trained on part 1's data with
+   pitted = damaged). Reference of a record at load L: a record of the *healthy* file at load L. The healthy file's
+   first half gives the references, its second half the healthy test records; the broken file's records are
+   all test records. Limit: the healthy test records and their references come from the same run, the broken
+   ones from another run, so a run-to-run change of the rig (remounting, temperature) would also read as damage;
+   the recordings do not say whether one happened.
+
+Run: about 35 min on 2 cores (datasets of part 1, 2 x 1200 records with twins: 4 min; three CNN trainings).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "tests"))
+sys.path.insert(0, str(ROOT / "experiments"))
+
+from models.representations import RepresentationSpec  # noqa: E402
+
+OUT = ROOT / "experiments" / "out" / "models" / "reference"
+TRAIN = "default_pitch_ref"
+ORDER = RepresentationSpec(kind="order", n_revs=8, max_order=100.0)
+TSA_REF = RepresentationSpec(kind="tsa", n_revs=8, samples_per_rev=1024, reference=True)
+VARIANTS = {"order_ref": (RepresentationSpec(kind="order", n_revs=8, max_order=100.0, reference=True), ()),
+            "order": (ORDER, ()),
+            "tsa_ref_op": (TSA_REF, ("speed_rpm", "torque_nm")),
+            "tsa_op": (RepresentationSpec(kind="tsa", n_revs=8, samples_per_rev=1024), ("speed_rpm", "torque_nm"))}
+MESH_ORDER_REF = {"mesh_order_ref": (RepresentationSpec(kind="mesh_order", n_mesh_periods=256, max_order=4.0,
+                                                        reference=True), ())}
+REAL = ROOT.parent / "shared" / "data" / "spectraquest_gfd"
+
+
+def write_foreign_folder(folder: Path, n_per_cell: int, seed: int) -> Path:
+    """The foreign records of ``foreign_classifier_check.write_folder`` (same draws), each with its healthy twin
+    in ``references/`` named by the sidecar's ``reference``."""
+    import dataclasses
+
+    import pandas as pd
+
+    from foreign_classifier_check import BANDS, TEETH, draw_record
+    from foreign_rig import simulate_foreign
+
+    (folder / "references").mkdir(parents=True, exist_ok=True)
+    rng = np.random.default_rng(seed)
+    cells = [("healthy", "0")] * 3 + [(s, t) for s in BANDS for t in TEETH]
+    rows, k = [], 0
+    for s, t in cells:
+        for _ in range(n_per_cell):
+            name = f"foreign_{k:04d}.npz"
+            rig, labels = draw_record(rng, s, t, seed * 100000 + k, True)
+            if not (folder / name).is_file():
+                twin = dataclasses.replace(rig, pits={}, noise_seed=rig.seed + 7919)
+                for where, r in ((folder / "references" / name, twin), (folder / name, rig)):
+                    out = simulate_foreign(r)
+                    meta = {"pair": "spur-gds", "speed_rpm": r.speed_rpm, "torque_nm": r.torque_nm,
+                            "fs_hz": r.fs_hz, "sensor": "acc", "tacho": "tacho"}
+                    if where.parent == folder:
+                        meta["reference"] = f"references/{name}"
+                    (where.parent / (where.stem + ".json")).write_text(json.dumps(meta))
+                    tmp = where.parent / (where.name + ".tmp.npz")
+                    np.savez(tmp, acc=out["acc"].astype(np.float32), tacho=out["tacho"].astype(np.float32))
+                    tmp.rename(where)
+            rows.append({"file": name, **labels})
+            k += 1
+    pd.DataFrame(rows).to_csv(folder / "labels.csv", index=False)
+    return folder
+
+
+def real_with_references(channel: str):
+    """SpectraQuest records of one channel with references (module docstring, part 3), or None without the data."""
+    from models.data import SignalSet, concat
+    from models.unknown_rate import load_unknown_rate_csv
+
+    files = sorted(REAL.glob("*30hz*.csv"))
+    if not files:
+        return None
+    d = load_unknown_rate_csv(files, channel=channel, record_samples=8192)
+    lab = d.labels
+    parts = []
+    for load in sorted(lab["load_percent"].unique()):
+        h = np.nonzero((lab["load_percent"] == load).to_numpy() & (lab["severity_class"] == "healthy").to_numpy())[0]
+        b = np.nonzero((lab["load_percent"] == load).to_numpy() & (lab["severity_class"] != "healthy").to_numpy())[0]
+        half = h.size // 2
+        refs, tests = h[:half], h[half:]
+        for idx in (tests, b):
+            part = d.subset(idx)
+            ref = d.signals[refs[np.arange(idx.size) % refs.size]]
+            parts.append(SignalSet(part.signals, part.fs_hz, part.pair, part.labels, part.source, part.channel,
+                                   reference=np.asarray(ref)))
+    return concat(parts)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--records", type=int, default=8, help="foreign records per cell (12 cells)")
+    ap.add_argument("--seed", type=int, default=1, help="foreign records' seed")
+    ap.add_argument("--skip", nargs="*", default=[], choices=["foreign", "real"])
+    ap.add_argument("--variants", nargs="*", default=list(VARIANTS), choices=list(VARIANTS))
+    args = ap.parse_args(argv)
+    from eval_protocol import OUT as DATA_OUT, SEED, cnn_run, dataset, log, strata
+    from models.sources import load_measurements, measurement_files
+    from models.train import stratified_split
+
+    t0 = time.perf_counter()
+    data = dataset(TRAIN, DATA_OUT / "data")
+    assert data.reference is not None, "the training sweep must store healthy twins"
+    tr, te = stratified_split(strata(data), 0.3, SEED)
+    tests = {"in_domain": data.subset(te)}
+    if "foreign" not in args.skip:
+        folder = write_foreign_folder(OUT / f"foreign_seed{args.seed}", args.records, args.seed)
+        tests["foreign"] = load_measurements(measurement_files(folder))
+        log(f"foreign records with references: {folder} ({time.perf_counter() - t0:.0f} s)")
+    res = {"train": TRAIN, "n_train": int(tr.size), "n_test": {k: len(v) for k, v in tests.items()}, "cnn": {}}
+    for variant in args.variants:  # "order", "tsa_op" read the same records without their references
+        res["cnn"][variant] = cnn_run(data.subset(tr), tests, variant, OUT / f"cnn_{variant}", variants=VARIANTS)
+    if "real" not in args.skip:
+        real = {ch: real_with_references(ch) for ch in ("a1", "a2", "a3", "a4")}
+        if all(v is not None for v in real.values()):
+            res["real"] = cnn_run(data, real, "mesh_order_ref", OUT / "cnn_mesh_order_ref", task="binary",
+                                  allow_mismatch=True, variants=MESH_ORDER_REF)
+            res["real"]["n_records"] = {ch: len(v) for ch, v in real.items()}
+            res["real"]["called_damaged"] = {}
+            for ch in real:
+                m = json.loads((OUT / "cnn_mesh_order_ref" / ch / "metrics.json").read_text())
+                conf = np.asarray(m["severity_class"]["confusion"])
+                res["real"]["called_damaged"][ch] = float(conf[:, 1].sum() / conf.sum())
+        else:
+            res["real"] = {"skipped": f"no files in {REAL}"}
+    print("| model | " + " | ".join(tests) + " |")
+    print("|---|" + "---|" * len(tests))
+    for variant, r in res["cnn"].items():
+        print(f"| CNN {variant} | " + " | ".join(f"{100 * r[k]['accuracy']:.1f} / {100 * r[k]['teeth_accuracy']:.1f}"
+                                                for k in tests) + " |")
+    if "real" in res and "skipped" not in res["real"]:
+        print("real data (binary): " + ", ".join(f"{ch} {100 * res['real'][ch]['accuracy']:.1f} % "
+                                                 f"(called damaged {100 * res['real']['called_damaged'][ch]:.0f} %)"
+                                                 for ch in ("a1", "a2", "a3", "a4")))
+    res["seconds"] = round(time.perf_counter() - t0, 1)
+    print(json.dumps(res, default=str))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
