@@ -33,6 +33,7 @@ Run: about 35 min on 2 cores (datasets of part 1, 2 x 1200 records with twins: 4
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 import time
@@ -50,11 +51,21 @@ from models.representations import RepresentationSpec  # noqa: E402
 OUT = ROOT / "experiments" / "out" / "models" / "reference"
 TRAIN = "default_pitch_ref"
 ORDER = RepresentationSpec(kind="order", n_revs=8, max_order=100.0)
+TE_TSA = RepresentationSpec(kind="tsa", n_revs=8, samples_per_rev=1024, lowpass_mesh_orders=1.25,
+                            remove_shaft_1x=True)
 TSA_REF = RepresentationSpec(kind="tsa", n_revs=8, samples_per_rev=1024, reference=True)
 VARIANTS = {"order_ref": (RepresentationSpec(kind="order", n_revs=8, max_order=100.0, reference=True), ()),
             "order": (ORDER, ()),
             "tsa_ref_op": (TSA_REF, ("speed_rpm", "torque_nm")),
-            "tsa_op": (RepresentationSpec(kind="tsa", n_revs=8, samples_per_rev=1024), ("speed_rpm", "torque_nm"))}
+            "tsa_op": (RepresentationSpec(kind="tsa", n_revs=8, samples_per_rev=1024), ("speed_rpm", "torque_nm")),
+            # the transmission error (--channel dte_m): tsa_te_diff of experiments/train_te_encoders.toml, and the
+            # same TSA read against the reference with the load and the record's level in metres
+            "te_diff": (TE_TSA, ("torque_nm", "signal_rms_no1x", "tsa_diff_rms", "tooth_profile")),
+            "te_ref": (dataclasses.replace(TE_TSA, reference=True), ("torque_nm", "signal_rms_no1x")),
+            # and with the residual's level in metres and its pitted-teeth profile (models/operating.py)
+            "te_ref_res": (dataclasses.replace(TE_TSA, reference=True),
+                           ("torque_nm", "signal_rms_no1x", "residual_rms", "residual_profile")),
+            "tsa_ref_res": (TSA_REF, ("speed_rpm", "torque_nm", "residual_profile"))}
 MESH_ORDER_REF = {"mesh_order_ref": (RepresentationSpec(kind="mesh_order", n_mesh_periods=256, max_order=4.0,
                                                         reference=True), ())}
 REAL = ROOT.parent / "shared" / "data" / "spectraquest_gfd"
@@ -125,14 +136,22 @@ def main(argv=None) -> int:
     ap.add_argument("--records", type=int, default=8, help="foreign records per cell (12 cells)")
     ap.add_argument("--seed", type=int, default=1, help="foreign records' seed")
     ap.add_argument("--skip", nargs="*", default=[], choices=["foreign", "real"])
-    ap.add_argument("--variants", nargs="*", default=list(VARIANTS), choices=list(VARIANTS))
+    ap.add_argument("--variants", nargs="*", default=["order_ref", "order", "tsa_ref_op", "tsa_op"],
+                    choices=list(VARIANTS))
+    ap.add_argument("--more", action="store_true",
+                    help="train on the split's 70 %% plus a second draw of the sweep (2038 records, as "
+                         "experiments/sensor_protocol.py does)")
+    ap.add_argument("--channel", default=None, help="stored channel (default: the accelerometer; dte_m: the "
+                    "transmission error, without the foreign and real parts, which have no such channel)")
     args = ap.parse_args(argv)
     from eval_protocol import OUT as DATA_OUT, SEED, cnn_run, dataset, log, strata
     from models.sources import load_measurements, measurement_files
     from models.train import stratified_split
 
     t0 = time.perf_counter()
-    data = dataset(TRAIN, DATA_OUT / "data")
+    data = dataset(TRAIN, DATA_OUT / "data", channel=args.channel)
+    if args.channel not in (None, "acc_pinion_loa_m_s2"):
+        args.skip = ["foreign", "real"]
     assert data.reference is not None, "the training sweep must store healthy twins"
     tr, te = stratified_split(strata(data), 0.3, SEED)
     tests = {"in_domain": data.subset(te)}
@@ -140,9 +159,18 @@ def main(argv=None) -> int:
         folder = write_foreign_folder(OUT / f"foreign_seed{args.seed}", args.records, args.seed)
         tests["foreign"] = load_measurements(measurement_files(folder))
         log(f"foreign records with references: {folder} ({time.perf_counter() - t0:.0f} s)")
-    res = {"train": TRAIN, "n_train": int(tr.size), "n_test": {k: len(v) for k, v in tests.items()}, "cnn": {}}
+    train = data.subset(tr)
+    if args.more:
+        from models.data import concat
+        from sensor_protocol import second_draw
+
+        train = concat([train, second_draw(DATA_OUT / "data", args.channel, base=TRAIN)])
+    res = {"train": TRAIN + (" + second draw" if args.more else ""), "n_train": len(train), "n_test": {k: len(v) for k, v in tests.items()}, "cnn": {}}
     for variant in args.variants:  # "order", "tsa_op" read the same records without their references
-        res["cnn"][variant] = cnn_run(data.subset(tr), tests, variant, OUT / f"cnn_{variant}", variants=VARIANTS)
+        res["cnn"][variant] = cnn_run(train, tests, variant,
+                                      OUT / f"cnn_{variant}{'_' + args.channel if args.channel else ''}"
+                                      f"{'_more' if args.more else ''}",
+                                      variants=VARIANTS)
     if "real" not in args.skip:
         real = {ch: real_with_references(ch) for ch in ("a1", "a2", "a3", "a4")}
         if all(v is not None for v in real.values()):

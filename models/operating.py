@@ -47,6 +47,11 @@ regression on these 12 values alone counts the teeth of the records above 1200 r
 without them 77-85 %; experiments/RESULTS.md, section "Sensor"). A transmission-error quantity: on the
 housing accelerometer the same regression is at chance.
 
+``residual_rms`` and ``residual_profile`` are ``tsa_diff_rms`` and ``tooth_profile`` read from the record's TSA
+*less its healthy reference's* (:func:`models.tsa.residual_difference`, the same filters; records with a
+reference, :mod:`models.representations`): the fault's share of the deviation, without the machine's own
+tooth-to-tooth spacing errors, which ``tsa_diff_rms`` and ``tooth_profile`` read as much as a pit.
+
 The standardisation is fitted once on the training records and stored in the
 model (:attr:`models.spec.ModelSpec.operating_inputs`): ``{"columns": [...],
 "mean": [...], "std": [...]}``; an empty dict means no side inputs.
@@ -57,18 +62,19 @@ import numpy as np
 
 from gearpit.errors import require
 from models.order_filters import highpass, rms_without_lines
-from models.tsa import tsa_difference
-from models.tooth_profile import N_FEATURES, PROFILE_SPEC, tooth_profile
+from models.tsa import residual_difference, tsa_difference
+from models.tooth_profile import N_FEATURES, PROFILE_SPEC, profile_of_difference, tooth_profile
 
 #: side inputs: label columns known at test time on a rig, and ``signal_rms``, the root-mean-square of
 #: the record in its own units (m/s^2 for the simulator), which makes the model depend on the sensor's
 #: calibration and on the transmission path (see the module docstring)
 OPERATING_COLUMNS: tuple[str, ...] = ("speed_rpm", "torque_nm", "signal_rms", "signal_rms_hp", "signal_rms_no1x",
-                                      "tsa_diff_rms", "tooth_profile")
+                                      "tsa_diff_rms", "tooth_profile", "residual_rms", "residual_profile")
 #: side inputs that are a group of values taken as they are (not log10): name -> number of values
-GROUPS = {"tooth_profile": N_FEATURES}
+GROUPS = {"tooth_profile": N_FEATURES, "residual_profile": N_FEATURES}
 #: side inputs computed from the record that need its speed (the ``speed_rpm`` label)
-NEEDS_SPEED = ("signal_rms_hp", "signal_rms_no1x", "tsa_diff_rms", "tooth_profile")
+NEEDS_SPEED = ("signal_rms_hp", "signal_rms_no1x", "tsa_diff_rms", "tooth_profile", "residual_rms",
+               "residual_profile")
 #: cut-off of ``signal_rms_hp`` (pinion shaft orders): above the wheel's and the pinion's first order, below
 #: the lowest pinion order a tooth fault spreads to that matters (the difference signal starts at 3)
 HIGHPASS_ORDERS = 2.5
@@ -93,6 +99,12 @@ def _speed_and_pair(data, c: str) -> np.ndarray:
 
 
 def _column(data, c: str) -> np.ndarray:
+    if c in ("residual_rms", "residual_profile"):
+        fr = _speed_and_pair(data, c)
+        require(data.reference is not None, "reference", None, f"a healthy reference of every record ({c})")
+        d = residual_difference(data.signals, data.reference, PROFILE_SPEC, fs_hz=data.fs_hz, shaft_hz=fr,
+                                z_pinion=int(data.pair.z_pinion), z_wheel=int(data.pair.z_wheel))
+        return np.sqrt(np.mean(d ** 2, axis=1)) if c == "residual_rms" else profile_of_difference(d, int(data.pair.z_pinion))
     if c == "tooth_profile":
         fr = _speed_and_pair(data, c)
         return tooth_profile(data.signals, fs_hz=data.fs_hz, shaft_hz=fr, z_pinion=int(data.pair.z_pinion),

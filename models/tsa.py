@@ -181,6 +181,29 @@ def tsa_against_reference(comb: np.ndarray, ref_comb: np.ndarray, samples_per_re
                     axis=1)
 
 
+def residual_difference(signals: np.ndarray, reference: np.ndarray, spec: RepresentationSpec, *, fs_hz: float,
+                        shaft_hz, z_pinion: int, z_wheel: int | None = None) -> np.ndarray:
+    """The difference signal of each record's TSA *residual* against its reference (:func:`align_comb`, start 0
+    for both) in the record's own unit, not normalised: ``(n_records, samples_per_rev)``. What the fault changed
+    in the orders a difference signal keeps (not 0-2, not the mesh harmonics and their first sidebands), without
+    the machine's own tooth-to-tooth deviations, which the record and the reference share. ``spec``: a ``tsa``
+    spec whose filters apply to both."""
+    x = np.asarray(signals, dtype=float)
+    r = np.asarray(reference, dtype=float)
+    require(spec.kind == "tsa", "representation.kind", spec.kind, "'tsa' (the residual is the TSA's)")
+    require(x.ndim == 2 and r.shape == x.shape, "reference", r.shape, f"the records' shape {x.shape}")
+    fr = _per_record(shaft_hz, x.shape[0], "shaft_hz")
+    check_inputs(spec, x.shape[1], fs_hz, fr, None, z_pinion=z_pinion, max_speed_factor=1.0, z_wheel=z_wheel)
+    zw, zp = (int(z_wheel) if z_wheel else 0), int(z_pinion)
+    out = np.empty((x.shape[0], spec.samples_per_rev))
+    for i in range(x.shape[0]):
+        c = _tsa_comb(x[i] - x[i].mean(), spec, float(fs_hz), float(fr[i]), (0.0,), zp, zw)
+        c0 = _tsa_comb(r[i] - r[i].mean(), spec, float(fs_hz), float(fr[i]), (0.0,), zp, zw)[0]
+        res = c - align_comb(c, c0)
+        out[i] = np.fft.irfft(res * _difference_mask(res.shape[1], zp), n=spec.samples_per_rev, axis=-1)[0]
+    return out
+
+
 def tsa_difference(signals: np.ndarray, spec: RepresentationSpec, *, fs_hz: float, shaft_hz, z_pinion: int,
                    z_wheel: int | None = None) -> np.ndarray:
     """The TSA difference signal of every record in the record's own unit (not normalised), from the segment

@@ -7,6 +7,7 @@ And against the problem it exists for: toy machines whose own tooth-to-tooth dev
 (``models.toy.toy_machines_with_references``), where a model without the reference cannot tell them apart.
 """
 import numpy as np
+import pandas as pd
 import pytest
 
 from gearpit.errors import InputError
@@ -272,3 +273,44 @@ def test_tsa_residual_holds_the_fault_not_the_machine(machines):
     res = np.sqrt(np.mean(r[:, 1] ** 2, axis=1))
     assert np.all(res[lab == "healthy"] < 0.02)
     assert np.mean(res[lab == "damaged"] > 5 * np.median(res[lab == "healthy"])) >= 0.9
+
+
+def test_residual_difference_is_the_faults_own_difference_signal():
+    """Superposition (the TSA is linear): a transmission-error-like record = the gear's own tooth-to-tooth
+    deviations (random, 1 um) + a 0.3 um dip on two teeth; its reference = the same deviations at another start
+    angle, other noise. The residual's difference signal equals that of the dip alone to 5 % of its RMS, and
+    the ``residual_rms`` / ``residual_profile`` side inputs are those of the dip, while the record's own
+    ``tsa_diff_rms`` is > 2 times larger (the deviations)."""
+    from models.data import PairInfo, SignalSet
+    from models.operating import _column
+    from models.tooth_profile import PROFILE_SPEC, profile_of_difference
+    from models.tsa import residual_difference, tsa_difference
+
+    fs, fr, z1, z2, n = 12800.0, 20.0, 29, 100, 25600
+    rng = np.random.default_rng(8)
+    dev = 1e-6 * rng.standard_normal(z1)
+    t = np.arange(n) / fs
+
+    def steps(values, theta):
+        """A smooth bump per tooth, analytic in the angle (band-limited: a shifted copy is an exact shift)."""
+        pitch = 2 * np.pi / z1
+        centres = (np.arange(z1) + 0.5) * pitch
+        d = np.angle(np.exp(1j * (theta[:, None] - centres[None, :])))
+        return (values[None, :] * np.exp(-(d / (0.4 * pitch)) ** 2)).sum(axis=1)
+
+    theta = 2 * np.pi * fr * t
+    dip = np.zeros(z1)
+    dip[[5, 6]] = -0.3e-6
+    mesh = 2e-6 * np.cos(z1 * theta)
+    noise = 1e-9
+    rec = mesh + steps(dev, theta) + steps(dip, theta) + noise * rng.standard_normal(n)
+    ref = 2e-6 * np.cos(z1 * (theta + 1.234)) + steps(dev, theta + 1.234) + noise * rng.standard_normal(n)
+    pit_only = steps(dip, theta)
+    res = residual_difference(rec[None], ref[None], PROFILE_SPEC, fs_hz=fs, shaft_hz=fr, z_pinion=z1, z_wheel=z2)[0]
+    own = tsa_difference(pit_only[None], PROFILE_SPEC, fs_hz=fs, shaft_hz=fr, z_pinion=z1, z_wheel=z2)[0]
+    assert np.sqrt(np.mean((res - own) ** 2)) < 0.05 * np.sqrt(np.mean(own ** 2))
+    d = SignalSet(rec[None].astype(np.float64), fs, PairInfo("spur-gds", z1, z2),
+                  pd.DataFrame({"speed_rpm": [60 * fr]}), reference=ref[None])
+    assert _column(d, "residual_rms")[0] == pytest.approx(np.sqrt(np.mean(own ** 2)), rel=0.05)
+    np.testing.assert_allclose(_column(d, "residual_profile")[0], profile_of_difference(own[None], z1)[0], atol=0.05)
+    assert _column(d, "tsa_diff_rms")[0] > 2 * np.sqrt(np.mean(own ** 2))
