@@ -138,6 +138,8 @@ def main(argv=None) -> int:
     ap.add_argument("--skip", nargs="*", default=[], choices=["foreign", "real"])
     ap.add_argument("--variants", nargs="*", default=["order_ref", "order", "tsa_ref_op", "tsa_op"],
                     choices=list(VARIANTS))
+    ap.add_argument("--train-seed", type=int, default=None,
+                    help="CNN training seed (default: the protocol's, 0; the split stays the protocol's)")
     ap.add_argument("--more", action="store_true",
                     help="train on the split's 70 %% plus a second draw of the sweep (2038 records, as "
                          "experiments/sensor_protocol.py does)")
@@ -165,11 +167,15 @@ def main(argv=None) -> int:
         from sensor_protocol import second_draw
 
         train = concat([train, second_draw(DATA_OUT / "data", args.channel, base=TRAIN)])
+    if args.train_seed is not None:       # cnn_run reads the protocol's seed when it trains
+        import eval_protocol
+        eval_protocol.SEED = args.train_seed
     res = {"train": TRAIN + (" + second draw" if args.more else ""), "n_train": len(train), "n_test": {k: len(v) for k, v in tests.items()}, "cnn": {}}
     for variant in args.variants:  # "order", "tsa_op" read the same records without their references
         res["cnn"][variant] = cnn_run(train, tests, variant,
                                       OUT / f"cnn_{variant}{'_' + args.channel if args.channel else ''}"
-                                      f"{'_more' if args.more else ''}",
+                                      f"{'_more' if args.more else ''}"
+                                      f"{'' if args.train_seed is None else f'_seed{args.train_seed}'}",
                                       variants=VARIANTS)
     if "real" not in args.skip:
         real = {ch: real_with_references(ch) for ch in ("a1", "a2", "a3", "a4")}
