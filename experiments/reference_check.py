@@ -1,6 +1,7 @@
 """Classifiers read against a healthy reference of the same machine: in-domain, on another simulator, on real data.
 
-Run: ``python experiments/reference_check.py [--records N] [--seed S] [--skip PART ...]``. The last line is JSON.
+Run: ``python experiments/reference_check.py [--records N] [--seed S] [--skip PART ...] [--variants V ...]
+[--channel dte_m] [--more] [--split speed|load] [--train-seed S]``. The last line is JSON.
 
 Every classifier of ``experiments/eval_protocol.py`` reads a record alone, and two things defeat it that a
 record alone cannot settle (``experiments/RESULTS.md``): a healthy gear's own random tooth-to-tooth spacing
@@ -28,7 +29,10 @@ Parts (each on the housing accelerometer ``acc_pinion_loa_m_s2``):
    ones from another run, so a run-to-run change of the rig (remounting, temperature) would also read as damage;
    the recordings do not say whether one happened.
 
-Run: about 35 min on 2 cores (datasets of part 1, 2 x 1200 records with twins: 4 min; three CNN trainings).
+Run: about 20 min on 2 cores with the default variants (datasets of part 1, 2 x 1200 records with twins: 2 min;
+the foreign records: 2 min; five CNN trainings of 1-3 min). ``--channel dte_m --more --variants te_ref_res te_diff``:
+the transmission error, trained on 2038 records (a second draw of the sweep, 2 min more), 12 min; ``--split
+speed|load``: the sensor protocol's cross-condition splits.
 """
 from __future__ import annotations
 
@@ -140,6 +144,9 @@ def main(argv=None) -> int:
                     choices=list(VARIANTS))
     ap.add_argument("--train-seed", type=int, default=None,
                     help="CNN training seed (default: the protocol's, 0; the split stays the protocol's)")
+    ap.add_argument("--split", default="in_domain", choices=["in_domain", "speed", "load"],
+                    help="speed / load: the sensor protocol's cross-condition splits (needs --more; test records "
+                         "at or above 1200 rpm / 50 N m, training records below, from both draws)")
     ap.add_argument("--more", action="store_true",
                     help="train on the split's 70 %% plus a second draw of the sweep (2038 records, as "
                          "experiments/sensor_protocol.py does)")
@@ -154,6 +161,9 @@ def main(argv=None) -> int:
     data = dataset(TRAIN, DATA_OUT / "data", channel=args.channel)
     if args.channel not in (None, "acc_pinion_loa_m_s2"):
         args.skip = ["foreign", "real"]
+    if args.split != "in_domain":
+        assert args.more, "--split speed|load needs --more (the sensor protocol's training records)"
+        args.skip = ["foreign", "real"]
     assert data.reference is not None, "the training sweep must store healthy twins"
     tr, te = stratified_split(strata(data), 0.3, SEED)
     tests = {"in_domain": data.subset(te)}
@@ -164,17 +174,24 @@ def main(argv=None) -> int:
     train = data.subset(tr)
     if args.more:
         from models.data import concat
-        from sensor_protocol import second_draw
+        from sensor_protocol import second_draw, training_and_test
 
-        train = concat([train, second_draw(DATA_OUT / "data", args.channel, base=TRAIN)])
+        more = second_draw(DATA_OUT / "data", args.channel, base=TRAIN)
+        if args.split == "in_domain":
+            train = concat([train, more])
+        else:
+            train, test, _ = training_and_test(args.split, data, more)
+            tests = {args.split: test}
     if args.train_seed is not None:       # cnn_run reads the protocol's seed when it trains
         import eval_protocol
         eval_protocol.SEED = args.train_seed
-    res = {"train": TRAIN + (" + second draw" if args.more else ""), "n_train": len(train), "n_test": {k: len(v) for k, v in tests.items()}, "cnn": {}}
+    res = {"train": TRAIN + (" + second draw" if args.more else ""), "split": args.split, "n_train": len(train),
+           "n_test": {k: len(v) for k, v in tests.items()}, "cnn": {}}
     for variant in args.variants:  # "order", "tsa_op" read the same records without their references
         res["cnn"][variant] = cnn_run(train, tests, variant,
                                       OUT / f"cnn_{variant}{'_' + args.channel if args.channel else ''}"
                                       f"{'_more' if args.more else ''}"
+                                      f"{'' if args.split == 'in_domain' else '_' + args.split}"
                                       f"{'' if args.train_seed is None else f'_seed{args.train_seed}'}",
                                       variants=VARIANTS)
     if "real" not in args.skip:
