@@ -36,14 +36,15 @@ THROUGHPUT_TARGET = 500.0
 
 sys.path.insert(0, str(ROOT / "experiments"))
 from eval_protocol import VARIANTS as PROTOCOL_VARIANTS, dataset  # noqa: E402
+from reference_check import VARIANTS as REFERENCE_VARIANTS  # noqa: E402
 from sensor_protocol import SENSOR_VARIANTS  # noqa: E402
 
 #: CNN variants of both protocols (representation + side inputs)
-VARIANTS = {**PROTOCOL_VARIANTS, **SENSOR_VARIANTS}
+VARIANTS = {**PROTOCOL_VARIANTS, **SENSOR_VARIANTS, **REFERENCE_VARIANTS}
 
 
-def default_dataset(data_dir: Path, channel: str | None = None):
-    return dataset("default", data_dir, channel=channel)
+def default_dataset(data_dir: Path, channel: str | None = None, name: str = "default"):
+    return dataset(name, data_dir, channel=channel)
 
 
 def main(argv=None) -> int:
@@ -53,6 +54,9 @@ def main(argv=None) -> int:
                     help="CNN variant of experiments/eval_protocol.py or sensor_protocol.py (representation + side "
                          "inputs; tsa_te: the transmission-error model)")
     ap.add_argument("--threads", type=int, default=1, choices=(1, 2), help="torch threads of the training")
+    ap.add_argument("--dataset", default="default",
+                    help="sweep of experiments/models_sweeps/ (with its _healthy part), e.g. default_pitch_ref for "
+                         "the variants read against a reference (experiments/reference_check.py)")
     ap.add_argument("--channel", default=None,
                     help="stored channel of the default dataset (default: the first, the housing accelerometer; "
                          "dte_m: the transmission error, experiments/sensor_protocol.py)")
@@ -60,13 +64,14 @@ def main(argv=None) -> int:
     import torch
 
     torch.set_num_threads(args.threads)
-    data = default_dataset(args.data_dir, args.channel)
+    data = default_dataset(args.data_dir, args.channel, args.dataset)
     rep, side = VARIANTS[args.variant]
-    print(f"default dataset: {len(data)} records x {data.n_samples} samples at {data.fs_hz:g} Hz, channel {data.channel}")
+    records = (lambda d: d.paired_signals()) if rep.reference else (lambda d: d.signals)
+    print(f"{args.dataset} dataset: {len(data)} records x {data.n_samples} samples at {data.fs_hz:g} Hz, channel {data.channel}")
 
     # reference: the representation alone, once over the training records
     t0 = time.perf_counter()
-    represent(data.signals, rep, fs_hz=data.fs_hz, shaft_hz=data.shaft_hz(), z_pinion=data.pair.z_pinion,
+    represent(records(data), rep, fs_hz=data.fs_hz, shaft_hz=data.shaft_hz(), z_pinion=data.pair.z_pinion,
               z_wheel=data.pair.z_wheel, starts=0.5)
     t_rep = time.perf_counter() - t0
 
@@ -91,7 +96,7 @@ def main(argv=None) -> int:
             model.predict(batch, n_crops=crops, threads=workers)
             rates[workers, crops] = n / (time.perf_counter() - t0)
     t0 = time.perf_counter()
-    represent(batch.signals, rep, fs_hz=batch.fs_hz, shaft_hz=batch.shaft_hz(), z_pinion=batch.pair.z_pinion,
+    represent(records(batch), rep, fs_hz=batch.fs_hz, shaft_hz=batch.shaft_hz(), z_pinion=batch.pair.z_pinion,
               z_wheel=batch.pair.z_wheel, starts=0.5)
     ref_rate = n / (time.perf_counter() - t0)
     for workers in (1, 2):
@@ -100,7 +105,7 @@ def main(argv=None) -> int:
               f"{THROUGHPUT_TARGET:.0f} on the 2 cores")
     print(f"reference: representation alone {ref_rate:.0f} signals/s (one thread); predict (1 crop, 1 worker) runs "
           f"at {rates[1, 1] / ref_rate:.2f} of it")
-    result = {"benchmark": "models", "variant": args.variant, "channel": data.channel, "representation": rep.kind,
+    result = {"benchmark": "models", "dataset": args.dataset, "variant": args.variant, "channel": data.channel, "representation": rep.kind,
               "side_inputs": list(side), "train_threads": args.threads, "n_records": len(data),
               "train_seconds": round(t_train, 1), "epochs": tr["epochs_run"], "n_parameters": tr["n_parameters"],
               "train_target_seconds": TRAIN_TARGET_S, "train_ok": t_train < TRAIN_TARGET_S,

@@ -21,7 +21,7 @@ from models.cnn import GearCNN
 from models.data import SignalSet
 from models.operating import n_operating, operating_features
 from models.representations import represent_crops
-from models.tsa import represent_crops_and_difference
+from models.tsa import represent_crops_and_difference, represent_crops_and_residual
 from models.tooth_profile import PROFILE_SPEC, profile_of_difference
 from models.spec import ModelSpec, Predictions, check_input
 
@@ -68,14 +68,31 @@ def represent_batch(data: SignalSet, spec: ModelSpec, sl: slice, crops: tuple[fl
         # tsa_diff_rms (the difference holds no order 0, so the record's mean does not enter)
         known = {"tooth_profile": profile_of_difference(diff, int(zp)),
                  "tsa_diff_rms": np.sqrt(np.mean(diff ** 2, axis=1)) * np.asarray(part.signals, float).std(axis=1)}
+    elif _residual_shares_fft(spec) and fr is not None and zp and zw:
+        # the residual side inputs from the first crop's combs (start 0, added and dropped if not asked for)
+        lead = crops if crops[0] == 0.0 else (0.0,) + tuple(crops)
+        x, diff = represent_crops_and_residual(part.paired_signals(), rep, fs_hz=part.fs_hz, crops=lead,
+                                               shaft_hz=fr, z_pinion=zp, z_wheel=zw)
+        x = x[:, len(lead) - len(crops):]
+        known = {"residual_rms": np.sqrt(np.mean(diff ** 2, axis=1)),
+                 "residual_profile": profile_of_difference(diff, int(zp))}
     else:
-        x = represent_crops(part.paired_signals() if rep.reference else part.signals, rep, fs_hz=part.fs_hz, crops=crops, shaft_hz=fr, mesh_cps=mc,
-                            z_pinion=zp, z_wheel=zw)
+        x = represent_crops(part.paired_signals() if rep.reference else part.signals, rep, fs_hz=part.fs_hz,
+                            crops=crops, shaft_hz=fr, mesh_cps=mc, z_pinion=zp, z_wheel=zw)
     x = torch.from_numpy(x.reshape(-1, *x.shape[2:]))
     if not spec.operating_inputs:
         return x, None
     side = operating_features(part, spec.operating_inputs, known)
     return x, torch.from_numpy(np.repeat(side, len(crops), axis=0))
+
+
+def _residual_shares_fft(spec: ModelSpec) -> bool:
+    """Whether the residual side inputs can be read with the network's crops (:func:`represent_batch`): the
+    network reads the residual's TSA with the filters the side inputs use."""
+    if not spec.operating_inputs or not {"residual_rms", "residual_profile"} & set(spec.operating_inputs["columns"]):
+        return False
+    rep = spec.representation_spec()
+    return rep.kind == "tsa" and rep.reference and replace(rep, reference=False) == PROFILE_SPEC
 
 
 def _profile_shares_fft(spec: ModelSpec) -> bool:

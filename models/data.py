@@ -123,7 +123,7 @@ class SignalSet:
         reference takes (:mod:`models.representations`); ``idx``: those records only."""
         require(self.reference is not None, "reference", None,
                 "a healthy reference for every record (a model read against a reference needs one: a dataset "
-                "generated with [output] healthy_reference = true, or a sidecar key 'reference')")
+                "generated with [sweep] healthy_reference = true, or a sidecar key 'reference')")
         sl = slice(None) if idx is None else idx
         return np.concatenate([self.signals[sl], self.reference[sl]], axis=1)
 

@@ -175,7 +175,7 @@ def check_input(spec: ModelSpec, data: SignalSet, *, allow_mismatch: bool = Fals
             require(data.reference is not None, "reference", None,
                     "a healthy reference for every record: this model reads each record against a recording of the "
                     "same machine at the same operating point without the fault (sidecar key 'reference', or a "
-                    "dataset generated with [output] healthy_reference = true)")
+                    "dataset generated with [sweep] healthy_reference = true)")
         check_inputs(spec.representation_spec(), data.n_samples, data.fs_hz, data.shaft_hz(), data.mesh_cps(),
                      z_pinion=data.pair.z_pinion or None, z_wheel=data.pair.z_wheel or None)
         for col in spec.operating_inputs.get("columns", ()):

@@ -204,6 +204,36 @@ def residual_difference(signals: np.ndarray, reference: np.ndarray, spec: Repres
     return out
 
 
+def represent_crops_and_residual(pairs: np.ndarray, spec: RepresentationSpec, *, fs_hz: float, crops, shaft_hz,
+                                 z_pinion: int, z_wheel: int) -> tuple[np.ndarray, np.ndarray]:
+    """``represent_crops`` of a ``tsa`` ``spec`` read against the reference (``pairs``: record then reference) and,
+    from the same combs, the residual difference signal of every record at start 0 in the record's unit (as
+    :func:`residual_difference` with ``spec``): ``(rep, diff)``. ``crops[0]`` must be 0. Used for the side inputs
+    ``residual_rms`` / ``residual_profile`` at prediction, instead of two more TSAs per record."""
+    x = np.asarray(pairs)
+    require(spec.kind == "tsa" and spec.reference, "representation", spec.to_dict(), "a tsa spec with reference")
+    require(x.ndim == 2 and x.shape[1] % 2 == 0, "signals", x.shape, "pairs of record and reference")
+    st = tuple(float(v) for v in crops)
+    require(len(st) >= 1 and st[0] == 0.0, "crops", list(st), "starts whose first is 0")
+    n, half = x.shape[0], x.shape[1] // 2
+    fr = _per_record(shaft_hz, n, "shaft_hz")
+    check_inputs(spec, half, fs_hz, fr, None, z_pinion=z_pinion, z_wheel=z_wheel)
+    rep = np.empty((n, len(st), spec.n_channels, spec.length), dtype=np.float32)
+    diff = np.empty((n, spec.samples_per_rev))
+    zp, zw, spr = int(z_pinion), int(z_wheel), spec.samples_per_rev
+    for i in range(n):
+        rec, ref = x[i, :half].astype(float), x[i, half:].astype(float)
+        rec, ref = rec - rec.mean(), ref - ref.mean()
+        sd = ref.std()
+        sd = sd if sd > 0 else 1.0
+        comb = _tsa_comb(rec / sd, spec, float(fs_hz), float(fr[i]), st, zp, zw)
+        ref_comb = _tsa_comb(ref / sd, spec, float(fs_hz), float(fr[i]), (0.0,), zp, zw)[0]
+        rep[i] = tsa_against_reference(comb, ref_comb, spr)
+        res0 = comb[0] - align_comb(comb[:1], ref_comb)[0]
+        diff[i] = np.fft.irfft(res0 * _difference_mask(res0.size, zp), n=spr) * sd
+    return rep, diff
+
+
 def tsa_difference(signals: np.ndarray, spec: RepresentationSpec, *, fs_hz: float, shaft_hz, z_pinion: int,
                    z_wheel: int | None = None) -> np.ndarray:
     """The TSA difference signal of every record in the record's own unit (not normalised), from the segment

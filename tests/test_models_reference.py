@@ -314,3 +314,37 @@ def test_residual_difference_is_the_faults_own_difference_signal():
     assert _column(d, "residual_rms")[0] == pytest.approx(np.sqrt(np.mean(own ** 2)), rel=0.05)
     np.testing.assert_allclose(_column(d, "residual_profile")[0], profile_of_difference(own[None], z1)[0], atol=0.05)
     assert _column(d, "tsa_diff_rms")[0] > 2 * np.sqrt(np.mean(own ** 2))
+
+
+def test_residual_side_inputs_read_from_the_networks_own_crops_equal_the_direct_ones(machines, monkeypatch):
+    """At prediction the residual side inputs of a model whose TSA is the profile's (``te_ref_res``) come from the
+    network's first crop (``represent_crops_and_residual``) instead of two more TSAs per record: the
+    representation is the same bit for bit, the residual difference signal within 1e-9 of its RMS, and the
+    predictions of a model within 1e-6 of the direct path's."""
+    import dataclasses
+
+    import models.classifier as classifier
+    from models.representations import represent_crops
+    from models.tooth_profile import PROFILE_SPEC
+    from models.tsa import represent_crops_and_residual, residual_difference
+
+    d = machines[1].subset(np.arange(8))
+    spec = dataclasses.replace(PROFILE_SPEC, reference=True)
+    fr = d.shaft_hz()
+    rep, diff = represent_crops_and_residual(d.paired_signals(), spec, fs_hz=d.fs_hz, crops=(0.0, 0.5, 1.0),
+                                             shaft_hz=fr, z_pinion=13, z_wheel=29)
+    direct = represent_crops(d.paired_signals(), spec, fs_hz=d.fs_hz, crops=(0.0, 0.5, 1.0), shaft_hz=fr,
+                             z_pinion=13, z_wheel=29)
+    np.testing.assert_array_equal(rep, direct)
+    ref_diff = residual_difference(d.signals, d.reference, PROFILE_SPEC, fs_hz=d.fs_hz, shaft_hz=fr, z_pinion=13,
+                                   z_wheel=29)
+    scale = np.sqrt(np.mean(ref_diff ** 2, axis=1, keepdims=True))
+    assert np.max(np.abs(diff - ref_diff) / scale) < 1e-9
+    cfg = TrainConfig(representation=spec, operating_inputs=("residual_rms", "residual_profile"), max_epochs=2,
+                      patience=2, batch_size=16, widths=(8, 8, 16, 16, 16), hidden=16, seed=0, task="binary")
+    model = train_cnn(machines[0].subset(np.arange(40)), cfg)
+    assert classifier._residual_shares_fft(model.spec)
+    shared = model.predict(d, n_crops=3)
+    monkeypatch.setattr(classifier, "_residual_shares_fft", lambda spec: False)
+    plain = model.predict(d, n_crops=3)
+    np.testing.assert_allclose(shared.severity_proba, plain.severity_proba, atol=1e-6)
