@@ -80,10 +80,10 @@ References
 .. [3] Lebold, M. et al. (2000). Review of vibration analysis methods for gearbox
    diagnostics and prognostics. Proc. 54th MFPT, 623-634 (regular, residual and
    difference signals).
-.. [5] Randall, R. B. (2011), section 5.2.2: spectrum comparison with a reference ("baseline") spectrum of the
-   same machine, the first step of condition monitoring in practice.
 .. [4] Welch, P. D. (1967). The use of fast Fourier transform for the estimation
    of power spectra. IEEE Transactions on Audio and Electroacoustics 15(2), 70-73.
+.. [5] Randall, R. B. (2011), section 5.2.2: spectrum comparison with a reference ("baseline") spectrum of the
+   same machine, the first step of condition monitoring in practice.
 """
 from __future__ import annotations
 
