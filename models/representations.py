@@ -82,7 +82,7 @@ References
    difference signals).
 .. [4] Welch, P. D. (1967). The use of fast Fourier transform for the estimation
    of power spectra. IEEE Transactions on Audio and Electroacoustics 15(2), 70-73.
-.. [5] Randall, R. B. (2011), section 5.2.2: spectrum comparison with a reference ("baseline") spectrum of the
+.. [5] Randall, R. B. (2011), chapter 5 (fault detection): spectrum comparison with a reference ("baseline") spectrum of the
    same machine, the first step of condition monitoring in practice.
 """
 from __future__ import annotations

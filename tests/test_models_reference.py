@@ -1,6 +1,6 @@
 """Models that read a record against a healthy reference of the same machine (``reference = true``).
 
-Checked against what a reference must do by construction (Randall 2011, section 5.2.2, spectrum comparison):
+Checked against what a reference must do by construction (Randall 2011, chapter 5, spectrum comparison):
 anything linear the machine adds to record and reference alike (sensor gain, mounting resonance) cancels in the
 log ratio; a record of the healthy machine reads ~0 at every order with content; a fault raises its sidebands.
 And against the problem it exists for: toy machines whose own tooth-to-tooth deviations are as strong as a fault
