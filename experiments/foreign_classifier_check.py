@@ -76,11 +76,17 @@ def draw_record(rng: np.random.Generator, severity_class: str, teeth_class: str,
     return rig, labels
 
 
-def write_folder(folder: Path, n_per_cell: int, seed: int, pitch: bool = True) -> Path:
-    """Healthy + every (severity, teeth) cell, ``n_per_cell`` records each, as measurement files."""
+def write_folder(folder: Path, n_per_cell: int, seed: int, pitch: bool = True, references: bool = False) -> Path:
+    """Healthy + every (severity, teeth) cell, ``n_per_cell`` records each, as measurement files; with
+    ``references``, each record's healthy twin (the same rig without pits, other noise) in ``references/``, named
+    by the record's sidecar key ``reference`` (experiments/reference_check.py). The same draws either way."""
+    import dataclasses
+
     import pandas as pd
 
     folder.mkdir(parents=True, exist_ok=True)
+    if references:
+        (folder / "references").mkdir(exist_ok=True)
     rng = np.random.default_rng(seed)
     cells = [("healthy", "0")] * 3 + [(s, t) for s in BANDS for t in TEETH]
     rows = []
@@ -90,13 +96,18 @@ def write_folder(folder: Path, n_per_cell: int, seed: int, pitch: bool = True) -
             name = f"foreign_{k:04d}.npz"
             rig, labels = draw_record(rng, s, t, seed * 100000 + k, pitch)
             if not (folder / name).is_file():
-                out = simulate_foreign(rig)
-                tmp = folder / (name + ".tmp.npz")
-                np.savez(tmp, acc=out["acc"].astype(np.float32), tacho=out["tacho"].astype(np.float32))
-                meta = {"pair": "spur-gds", "speed_rpm": rig.speed_rpm, "torque_nm": rig.torque_nm,
-                        "fs_hz": rig.fs_hz, "sensor": "acc", "tacho": "tacho"}
-                (folder / (Path(name).stem + ".json")).write_text(json.dumps(meta))
-                tmp.rename(folder / name)
+                todo = [(folder / name, rig, {"reference": f"references/{name}"} if references else {})]
+                if references:   # the twin first: the record's file is the commit mark of both
+                    twin = dataclasses.replace(rig, pits={}, noise_seed=rig.seed + 7919)
+                    todo.insert(0, (folder / "references" / name, twin, {}))
+                for where, r, extra in todo:
+                    out = simulate_foreign(r)
+                    meta = {"pair": "spur-gds", "speed_rpm": r.speed_rpm, "torque_nm": r.torque_nm,
+                            "fs_hz": r.fs_hz, "sensor": "acc", "tacho": "tacho", **extra}
+                    (where.parent / (where.stem + ".json")).write_text(json.dumps(meta))
+                    tmp = where.parent / (where.name + ".tmp.npz")
+                    np.savez(tmp, acc=out["acc"].astype(np.float32), tacho=out["tacho"].astype(np.float32))
+                    tmp.rename(where)
             rows.append({"file": name, **labels})
             k += 1
     pd.DataFrame(rows).to_csv(folder / "labels.csv", index=False)

@@ -75,42 +75,6 @@ MESH_ORDER_REF = {"mesh_order_ref": (RepresentationSpec(kind="mesh_order", n_mes
 REAL = ROOT.parent / "shared" / "data" / "spectraquest_gfd"
 
 
-def write_foreign_folder(folder: Path, n_per_cell: int, seed: int) -> Path:
-    """The foreign records of ``foreign_classifier_check.write_folder`` (same draws), each with its healthy twin
-    in ``references/`` named by the sidecar's ``reference``."""
-    import dataclasses
-
-    import pandas as pd
-
-    from foreign_classifier_check import BANDS, TEETH, draw_record
-    from foreign_rig import simulate_foreign
-
-    (folder / "references").mkdir(parents=True, exist_ok=True)
-    rng = np.random.default_rng(seed)
-    cells = [("healthy", "0")] * 3 + [(s, t) for s in BANDS for t in TEETH]
-    rows, k = [], 0
-    for s, t in cells:
-        for _ in range(n_per_cell):
-            name = f"foreign_{k:04d}.npz"
-            rig, labels = draw_record(rng, s, t, seed * 100000 + k, True)
-            if not (folder / name).is_file():
-                twin = dataclasses.replace(rig, pits={}, noise_seed=rig.seed + 7919)
-                for where, r in ((folder / "references" / name, twin), (folder / name, rig)):
-                    out = simulate_foreign(r)
-                    meta = {"pair": "spur-gds", "speed_rpm": r.speed_rpm, "torque_nm": r.torque_nm,
-                            "fs_hz": r.fs_hz, "sensor": "acc", "tacho": "tacho"}
-                    if where.parent == folder:
-                        meta["reference"] = f"references/{name}"
-                    (where.parent / (where.stem + ".json")).write_text(json.dumps(meta))
-                    tmp = where.parent / (where.name + ".tmp.npz")
-                    np.savez(tmp, acc=out["acc"].astype(np.float32), tacho=out["tacho"].astype(np.float32))
-                    tmp.rename(where)
-            rows.append({"file": name, **labels})
-            k += 1
-    pd.DataFrame(rows).to_csv(folder / "labels.csv", index=False)
-    return folder
-
-
 def real_with_references(channel: str):
     """SpectraQuest records of one channel with references (module docstring, part 3), or None without the data."""
     from models.data import SignalSet, concat
@@ -168,7 +132,9 @@ def main(argv=None) -> int:
     tr, te = stratified_split(strata(data), 0.3, SEED)
     tests = {"in_domain": data.subset(te)}
     if "foreign" not in args.skip:
-        folder = write_foreign_folder(OUT / f"foreign_seed{args.seed}", args.records, args.seed)
+        from foreign_classifier_check import write_folder
+
+        folder = write_folder(OUT / f"foreign_seed{args.seed}", args.records, args.seed, references=True)
         tests["foreign"] = load_measurements(measurement_files(folder))
         log(f"foreign records with references: {folder} ({time.perf_counter() - t0:.0f} s)")
     train = data.subset(tr)

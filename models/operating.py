@@ -98,12 +98,17 @@ def _speed_and_pair(data, c: str) -> np.ndarray:
     return fr
 
 
-def _column(data, c: str) -> np.ndarray:
+def _column(data, c: str, cache: dict | None = None) -> np.ndarray:
+    """Side input ``c`` of every record; ``cache`` keeps what two columns share (the residual difference signal)."""
     if c in ("residual_rms", "residual_profile"):
-        fr = _speed_and_pair(data, c)
-        require(data.reference is not None, "reference", None, f"a healthy reference of every record ({c})")
-        d = residual_difference(data.signals, data.reference, PROFILE_SPEC, fs_hz=data.fs_hz, shaft_hz=fr,
-                                z_pinion=int(data.pair.z_pinion), z_wheel=int(data.pair.z_wheel))
+        cache = {} if cache is None else cache
+        if "residual" not in cache:
+            fr = _speed_and_pair(data, c)
+            require(data.reference is not None, "reference", None, f"a healthy reference of every record ({c})")
+            cache["residual"] = residual_difference(data.signals, data.reference, PROFILE_SPEC, fs_hz=data.fs_hz,
+                                                    shaft_hz=fr, z_pinion=int(data.pair.z_pinion),
+                                                    z_wheel=int(data.pair.z_wheel))
+        d = cache["residual"]
         return np.sqrt(np.mean(d ** 2, axis=1)) if c == "residual_rms" else profile_of_difference(d, int(data.pair.z_pinion))
     if c == "tooth_profile":
         fr = _speed_and_pair(data, c)
@@ -136,9 +141,9 @@ def _column(data, c: str) -> np.ndarray:
 def _values(data, cols: tuple[str, ...], known: dict | None = None) -> np.ndarray:
     """``log10`` of each scalar side input, the values of each group (:data:`GROUPS`) as they are; a column in
     ``known`` (name -> values) is taken from there instead of computed."""
-    parts = []
+    parts, cache = [], {}
     for c in cols:
-        v = known[c] if known and c in known else _column(data, c)
+        v = known[c] if known and c in known else _column(data, c, cache)
         if c in GROUPS:
             require(bool(np.all(np.isfinite(v))), c, "non-finite values", "finite values for every record")
             parts.append(v.reshape(len(data), GROUPS[c]))

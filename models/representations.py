@@ -95,7 +95,7 @@ from scipy.signal import resample
 
 from gearpit.errors import InputError, require, require_positive
 from models.input_checks import check_inputs
-from models.segments import _normalise, _per_record, _starts
+from models.segments import _normalise, _per_record, _split_pair, _starts
 from models.tsa import _tsa_comb, _tsa_normalised, tsa_against_reference
 
 Kind = Literal["raw", "envelope", "tsa", "order", "mesh_order"]
@@ -280,15 +280,8 @@ def _crops(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, shaft_hz: floa
     The work that does not depend on the start (normalisation, the stretched record of ``envelope``,
     the FFT plan of a segment length) is done once for all crops.
     """
-    ref = None
-    if spec.reference:  # a pair: the record, then its reference, both scaled by the reference's spread
-        half = x.size // 2
-        x, ref = x[:half].astype(float), x[half:].astype(float)
-        x, ref = x - x.mean(), ref - ref.mean()
-        sd = ref.std()
-        x, ref = (x / sd, ref / sd) if sd > 0 else (x, ref)
-    else:
-        x = _normalise(x.astype(float))
+    # a pair: the record, then its reference, both scaled by the reference's spread
+    x, ref = _split_pair(x)[:2] if spec.reference else (_normalise(x.astype(float)), None)
     k = spec.kind
     n_seg = spec.segment_length(fs_hz, shaft_hz, mesh_cps, speed_factor)
     if k == "raw":
@@ -307,7 +300,7 @@ def _crops(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, shaft_hz: floa
         comb = _tsa_comb(x, spec, fs_hz, shaft_hz * speed_factor, starts, z_pinion, z_wheel)
         if ref is not None:
             ref_comb = _tsa_comb(ref, spec, fs_hz, shaft_hz * speed_factor, (0.0,), z_pinion, z_wheel)[0]
-            return tsa_against_reference(comb, ref_comb, spec.samples_per_rev)
+            return tsa_against_reference(comb, ref_comb, spec.samples_per_rev)[0]
         return _tsa_normalised(comb, spec.samples_per_rev, z_pinion)[0]
     if k == "order":
         # bin j of the segment is shaft order j * (revolutions in the segment)^-1
@@ -319,14 +312,13 @@ def _crops(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, shaft_hz: floa
     crop_starts = [_starts(x.size, n_seg, st, True) for st in starts]
     amp = _mean_amplitudes(x, n_seg, crop_starts, False)
     env = _mean_amplitudes(x, n_seg, crop_starts, True)
-    if ref is not None:
+    if ref is not None:   # log ratio to the reference's spectra (all its segments), not standardised, clipped
+        def log(a):
+            return _log_on_grid(a, unit, spec.length, step, standardise=False)
+
         every = [_starts(ref.size, n_seg, 0.0, True)]
-        base = [_log_on_grid(_mean_amplitudes(ref, n_seg, every, e)[0], unit, spec.length, step, standardise=False)
-                for e in (False, True)]
-        return np.stack([np.stack([np.clip(_log_on_grid(a, unit, spec.length, step, standardise=False) - base[0],
-                                           -REFERENCE_CLIP, REFERENCE_CLIP),
-                                   np.clip(_log_on_grid(e, unit, spec.length, step, standardise=False) - base[1],
-                                           -REFERENCE_CLIP, REFERENCE_CLIP)])
+        base = [log(_mean_amplitudes(ref, n_seg, every, e)[0]) for e in (False, True)]
+        return np.stack([np.clip(np.stack([log(a) - base[0], log(e) - base[1]]), -REFERENCE_CLIP, REFERENCE_CLIP)
                          for a, e in zip(amp, env)])
     return np.stack([np.stack([_log_on_grid(a, unit, spec.length, step), _log_on_grid(e, unit, spec.length, step)])
                      for a, e in zip(amp, env)])

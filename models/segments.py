@@ -15,6 +15,16 @@ def _normalise(seg: np.ndarray) -> np.ndarray:
     return s / sd if sd > 0 else s
 
 
+def _split_pair(pair: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    """A record followed by its reference (:meth:`models.data.SignalSet.paired_signals`): both less their mean
+    and over the reference's standard deviation (1 if zero), and that deviation."""
+    half = pair.size // 2
+    rec, ref = pair[:half].astype(float), pair[half:].astype(float)
+    rec, ref = rec - rec.mean(), ref - ref.mean()
+    sd = float(ref.std()) or 1.0
+    return rec / sd, ref / sd, sd
+
+
 def _starts(size: int, n_seg: int, start: float, average: bool) -> list[int]:
     """Segment starts: one at ``start`` of the free room, or (``average``) one every half
     segment, the first shifted by ``start`` of at most half a segment."""

@@ -18,7 +18,7 @@ from gearpit.errors import require
 from models.input_checks import check_inputs
 from models.order_filters import (dft_at, highpass, lines_dft_at, lowpass_gain, remove_shaft_lines,
                                   shaft_line_fit)
-from models.segments import _normalise, _per_record, _starts
+from models.segments import _normalise, _per_record, _split_pair, _starts
 
 if TYPE_CHECKING:
     from models.representations import RepresentationSpec
@@ -167,18 +167,18 @@ def align_comb(comb: np.ndarray, ref: np.ndarray) -> np.ndarray:
     return ref[None, :] * np.exp(-1j * k[None, :] * d[:, None])
 
 
-def tsa_against_reference(comb: np.ndarray, ref_comb: np.ndarray, samples_per_rev: int) -> np.ndarray:
+def tsa_against_reference(comb: np.ndarray, ref_comb: np.ndarray, samples_per_rev: int
+                          ) -> tuple[np.ndarray, np.ndarray]:
     """The ``tsa`` representation read against a reference (:mod:`models.representations`): for each crop's
     comb, the record's TSA and its residual, the TSA less the reference's aligned one (:func:`align_comb`),
-    both over the reference TSA's standard deviation: ``(n_crops, 2, samples_per_rev)``."""
-    aligned = align_comb(comb, ref_comb)
-    ref_avg = np.fft.irfft(ref_comb, n=samples_per_rev)
-    sd = ref_avg.std()
-    sd = sd if sd > 0 else 1.0
+    both over the reference TSA's standard deviation: ``(n_crops, 2, samples_per_rev)``; and the residual combs
+    ``(n_crops, K + 1)``."""
+    residual = comb - align_comb(comb, ref_comb)
+    sd = float(np.fft.irfft(ref_comb, n=samples_per_rev).std()) or 1.0
     avg = np.fft.irfft(comb, n=samples_per_rev, axis=-1)
-    res = np.fft.irfft(comb - aligned, n=samples_per_rev, axis=-1)
+    res = np.fft.irfft(residual, n=samples_per_rev, axis=-1)
     return np.stack([(avg - avg.mean(axis=-1, keepdims=True)) / sd, (res - res.mean(axis=-1, keepdims=True)) / sd],
-                    axis=1)
+                    axis=1), residual
 
 
 def residual_difference(signals: np.ndarray, reference: np.ndarray, spec: RepresentationSpec, *, fs_hz: float,
@@ -199,8 +199,7 @@ def residual_difference(signals: np.ndarray, reference: np.ndarray, spec: Repres
     for i in range(x.shape[0]):
         c = _tsa_comb(x[i] - x[i].mean(), spec, float(fs_hz), float(fr[i]), (0.0,), zp, zw)
         c0 = _tsa_comb(r[i] - r[i].mean(), spec, float(fs_hz), float(fr[i]), (0.0,), zp, zw)[0]
-        res = c - align_comb(c, c0)
-        out[i] = np.fft.irfft(res * _difference_mask(res.shape[1], zp), n=spec.samples_per_rev, axis=-1)[0]
+        out[i] = _tsa_channels(c - align_comb(c, c0), spec.samples_per_rev, zp)[1][0]
     return out
 
 
@@ -215,22 +214,18 @@ def represent_crops_and_residual(pairs: np.ndarray, spec: RepresentationSpec, *,
     require(x.ndim == 2 and x.shape[1] % 2 == 0, "signals", x.shape, "pairs of record and reference")
     st = tuple(float(v) for v in crops)
     require(len(st) >= 1 and st[0] == 0.0, "crops", list(st), "starts whose first is 0")
-    n, half = x.shape[0], x.shape[1] // 2
+    n = x.shape[0]
     fr = _per_record(shaft_hz, n, "shaft_hz")
-    check_inputs(spec, half, fs_hz, fr, None, z_pinion=z_pinion, z_wheel=z_wheel)
+    check_inputs(spec, x.shape[1] // 2, fs_hz, fr, None, z_pinion=z_pinion, z_wheel=z_wheel)
     rep = np.empty((n, len(st), spec.n_channels, spec.length), dtype=np.float32)
     diff = np.empty((n, spec.samples_per_rev))
     zp, zw, spr = int(z_pinion), int(z_wheel), spec.samples_per_rev
     for i in range(n):
-        rec, ref = x[i, :half].astype(float), x[i, half:].astype(float)
-        rec, ref = rec - rec.mean(), ref - ref.mean()
-        sd = ref.std()
-        sd = sd if sd > 0 else 1.0
-        comb = _tsa_comb(rec / sd, spec, float(fs_hz), float(fr[i]), st, zp, zw)
-        ref_comb = _tsa_comb(ref / sd, spec, float(fs_hz), float(fr[i]), (0.0,), zp, zw)[0]
-        rep[i] = tsa_against_reference(comb, ref_comb, spr)
-        res0 = comb[0] - align_comb(comb[:1], ref_comb)[0]
-        diff[i] = np.fft.irfft(res0 * _difference_mask(res0.size, zp), n=spr) * sd
+        rec, ref, sd = _split_pair(x[i])
+        comb = _tsa_comb(rec, spec, float(fs_hz), float(fr[i]), st, zp, zw)
+        ref_comb = _tsa_comb(ref, spec, float(fs_hz), float(fr[i]), (0.0,), zp, zw)[0]
+        rep[i], residual = tsa_against_reference(comb, ref_comb, spr)
+        diff[i] = _tsa_channels(residual[:1], spr, zp)[1][0] * sd
     return rep, diff
 
 
