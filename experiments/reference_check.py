@@ -1,7 +1,8 @@
 """Classifiers read against a healthy reference of the same machine: in-domain, on another simulator, on real data.
 
 Run: ``python experiments/reference_check.py [--records N] [--seed S] [--skip PART ...] [--variants V ...]
-[--channel dte_m] [--more] [--split speed|load] [--train-seed S]``. The last line is JSON.
+[--channel dte_m] [--more] [--split speed|load] [--train-seed S]
+[--baselines]``. The last line is JSON.
 
 Every classifier of ``experiments/eval_protocol.py`` reads a record alone, and two things defeat it that a
 record alone cannot settle (``experiments/RESULTS.md``): a healthy gear's own random tooth-to-tooth spacing
@@ -28,6 +29,9 @@ Parts (each on the housing accelerometer ``acc_pinion_loa_m_s2``):
    all test records. Limit: the healthy test records and their references come from the same run, the broken
    ones from another run, so a run-to-run change of the rig (remounting, temperature) would also read as damage;
    the recordings do not say whether one happened.
+
+``--baselines``: the feature-table baselines too (:mod:`models.reference_features`: each column's change since
+the reference and the TSA residual's indicators), beside the same baselines on the record's own columns.
 
 Run: about 20 min on 2 cores with the default variants (datasets of part 1, 2 x 1200 records with twins: 2 min;
 the foreign records: 2 min; five CNN trainings of 1-3 min). ``--channel dte_m --more --variants te_ref_res te_diff``:
@@ -99,6 +103,41 @@ def real_with_references(channel: str):
     return concat(parts)
 
 
+def cached_table(data, cfg: dict, path: Path, jobs: int) -> tuple[np.ndarray, list[str]]:
+    """Feature table of ``data`` (:func:`models.baselines.feature_table`), kept in ``path`` for reruns."""
+    from models.baselines import feature_table
+
+    if path.is_file():
+        z = np.load(path, allow_pickle=False)
+        if z["x"].shape[0] == len(data):
+            return z["x"], [str(v) for v in z["names"]]
+    x, names = feature_table(data, cfg, n_jobs=jobs)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".part.npz")
+    np.savez(tmp, x=x, names=np.array(names))
+    tmp.replace(path)
+    return x, names
+
+
+def baselines(train, tests: dict, tag: str, jobs: int) -> dict:
+    """The three feature-table baselines on the table read against the reference
+    (:mod:`models.reference_features`) and, as the control, on the record's own columns of the same table (the
+    baselines of ``eval_protocol``); the best of each chosen on an internal 80/20 split of the training part."""
+    from eval_protocol import baseline_runs
+    from models.baselines import feature_config_for
+
+    cfg = feature_config_for(train, reference=True)
+    x, names = cached_table(train, cfg, OUT / "features" / f"{tag}_train.npz", jobs)
+    xt = {k: cached_table(v, cfg, OUT / "features" / f"{tag}_{k}.npz", jobs)[0] for k, v in tests.items()}
+    own = int(sum(not n.startswith(("delta:", "residual:")) for n in names))
+    plain = {k: v for k, v in cfg.items() if k != "reference"}
+    return {"reference": baseline_runs(train, x, {k: (tests[k], xt[k]) for k in tests}, names, cfg,
+                                       OUT / f"baselines_ref_{tag}"),
+            "record_alone": baseline_runs(train, x[:, :own], {k: (tests[k], xt[k][:, :own]) for k in tests},
+                                          names[:own], plain, OUT / f"baselines_{tag}"),
+            "n_features": {"reference": len(names), "record_alone": own}}
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--records", type=int, default=8, help="foreign records per cell (12 cells)")
@@ -116,6 +155,10 @@ def main(argv=None) -> int:
                          "experiments/sensor_protocol.py does)")
     ap.add_argument("--channel", default=None, help="stored channel (default: the accelerometer; dte_m: the "
                     "transmission error, without the foreign and real parts, which have no such channel)")
+    ap.add_argument("--baselines", action="store_true",
+                    help="also the feature-table baselines (logreg, rf, gb) read against the reference, and on the "
+                         "record's own columns as the control")
+    ap.add_argument("--jobs", type=int, default=2, help="processes for the feature tables (--baselines)")
     args = ap.parse_args(argv)
     from eval_protocol import OUT as DATA_OUT, SEED, cnn_run, dataset, log, strata
     from models.sources import load_measurements, measurement_files
@@ -160,6 +203,9 @@ def main(argv=None) -> int:
                                       f"{'' if args.split == 'in_domain' else '_' + args.split}"
                                       f"{'' if args.train_seed is None else f'_seed{args.train_seed}'}",
                                       variants=VARIANTS)
+    if args.baselines:
+        tag = "_".join([args.channel or "acc", "more" if args.more else "protocol", args.split])
+        res["baselines"] = baselines(train, tests, tag, args.jobs)
     if "real" not in args.skip:
         real = {ch: real_with_references(ch) for ch in ("a1", "a2", "a3", "a4")}
         if all(v is not None for v in real.values()):
@@ -178,6 +224,12 @@ def main(argv=None) -> int:
     for variant, r in res["cnn"].items():
         print(f"| CNN {variant} | " + " | ".join(f"{100 * r[k]['accuracy']:.1f} / {100 * r[k]['teeth_accuracy']:.1f}"
                                                 for k in tests) + " |")
+    for group, r in res.get("baselines", {}).items():
+        if group == "n_features":
+            continue
+        best = r["best"]
+        print(f"| baseline {best} ({group.replace('_', ' ')}) | " + " | ".join(
+            f"{100 * r[best][k]['accuracy']:.1f} / {100 * r[best][k]['teeth_accuracy']:.1f}" for k in tests) + " |")
     if "real" in res and "skipped" not in res["real"]:
         print("real data (binary): " + ", ".join(f"{ch} {100 * res['real'][ch]['accuracy']:.1f} % "
                                                  f"(called damaged {100 * res['real']['called_damaged'][ch]:.0f} %)"

@@ -45,12 +45,15 @@ KINDS: tuple[str, ...] = ("logreg", "rf", "gb")
 TASK_KEYS: tuple[str, ...] = ("sev", "teeth", "reg")
 
 
-def feature_config_for(data: SignalSet, *, hht_method: str = "none", envelope_band: str = "full") -> dict:
+def feature_config_for(data: SignalSet, *, hht_method: str = "none", envelope_band: str = "full",
+                       reference: bool = False) -> dict:
     """The :class:`features.table.FeatureConfig` fields used for ``data`` (as a dict).
 
     Up to 3 mesh harmonics, as many as stay (with 3 sidebands) below the Nyquist
     frequency at the fastest speed of ``data``; HHT features off by default (the
-    EMD costs ~1 s per record).
+    EMD costs ~1 s per record). ``reference``: the table also reads every record
+    against its healthy reference (:mod:`models.reference_features`; ``data``
+    must have references, and so must every record the model predicts).
     """
     from features.table import FeatureConfig
 
@@ -59,19 +62,33 @@ def feature_config_for(data: SignalSet, *, hht_method: str = "none", envelope_ba
     fast = float(np.max(fr))
     n_h = int(min(3, np.floor((data.fs_hz / 2 - 3 * fast) / (data.pair.z_pinion * fast))))
     require(n_h >= 1, "speed_rpm", round(fast * 60, 1), "a speed whose mesh frequency lies below the Nyquist frequency")
-    return FeatureConfig(fs_hz=float(data.fs_hz), z_pinion=int(data.pair.z_pinion), z_wheel=int(data.pair.z_wheel),
-                         hht_method=hht_method, envelope_band=envelope_band, n_mesh_harmonics=n_h).to_dict()
+    require(not reference or data.reference is not None, "reference", None,
+            "a healthy reference of every record (a dataset generated with [sweep] healthy_reference = true, or "
+            "the sidecar key 'reference')")
+    cfg = FeatureConfig(fs_hz=float(data.fs_hz), z_pinion=int(data.pair.z_pinion), z_wheel=int(data.pair.z_wheel),
+                        hht_method=hht_method, envelope_band=envelope_band, n_mesh_harmonics=n_h).to_dict()
+    return {**cfg, "reference": True} if reference else cfg
 
 
 def feature_table(data: SignalSet, config: dict, *, n_jobs: int = 1) -> tuple[np.ndarray, list[str]]:
-    """Feature matrix ``(n_records, n_features)`` of ``data`` and the column names."""
+    """Feature matrix ``(n_records, n_features)`` of ``data`` and the column names (with ``config["reference"]``
+    also the columns of :mod:`models.reference_features`)."""
     from features.table import FeatureConfig, extract_features
 
-    cfg = FeatureConfig.from_dict({**config, "fs_hz": float(data.fs_hz)})
+    reference = bool(config.get("reference", False))
+    cfg = FeatureConfig.from_dict({**{k: v for k, v in config.items() if k != "reference"}, "fs_hz": float(data.fs_hz)})
     fr = data.shaft_hz()
     require(fr is not None, "speed_rpm", None, "the pinion speed of every record (the features need it)")
+    require(not reference or data.reference is not None, "reference", None,
+            "a healthy reference of every record (the baseline reads each record against one)")
     table = extract_features(data.signals, cfg, fr_pinion_hz=fr, n_jobs=n_jobs)
-    return table.to_numpy(dtype=float), list(table.columns)
+    x, names = table.to_numpy(dtype=float), list(table.columns)
+    if not reference:
+        return x, names
+    from models.reference_features import with_reference_columns
+
+    x_ref = extract_features(data.reference, cfg, fr_pinion_hz=fr, n_jobs=n_jobs).to_numpy(dtype=float)
+    return with_reference_columns(data, x, x_ref, names)
 
 
 # ---------------------------------------------------------------- export of fitted estimators

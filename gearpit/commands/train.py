@@ -27,8 +27,10 @@ def register(sub) -> None:
     p.add_argument("--config", type=Path, default=None, help="TOML with a [train] table (CNN options)")
     p.add_argument("--representation", choices=KINDS, default=None, help="CNN input representation (default order)")
     p.add_argument("--reference", action="store_true",
-                   help="read each record against its healthy reference (order / mesh_order; a dataset generated "
-                        "with [sweep] healthy_reference = true)")
+                   help="read each record against its healthy reference (a dataset generated with [sweep] "
+                        "healthy_reference = true): the CNN's order / mesh_order / tsa input, or a baseline's "
+                        "feature table with each column's change since the reference and the TSA residual's "
+                        "indicators (models/reference_features.py)")
     p.add_argument("--task", choices=("multi", "binary"), default=None, help="severity classes or healthy/damaged")
     p.add_argument("--channel", default=None, help="dataset channel (default: the first stored)")
     p.add_argument("--pair", default=None, help="gear pair of the dataset to use (if it holds several)")
@@ -77,7 +79,7 @@ def run(args) -> int:
     else:
         from models.baselines import feature_config_for, feature_table, fit_baseline
 
-        fcfg = feature_config_for(data)
+        fcfg = feature_config_for(data, reference=bool(args.reference))
         x, names = feature_table(data, fcfg, n_jobs=args.jobs)
         model = fit_baseline(data, args.model, features=x, feature_names=names, feature_config=fcfg,
                              task=args.task or "multi", seed=args.seed or 0)
