@@ -73,7 +73,9 @@ VARIANTS = {"order_ref": (RepresentationSpec(kind="order", n_revs=8, max_order=1
             # and with the residual's level in metres and its pitted-teeth profile (models/operating.py)
             "te_ref_res": (dataclasses.replace(TE_TSA, reference=True),
                            ("torque_nm", "signal_rms_no1x", "residual_rms", "residual_profile")),
-            "tsa_ref_res": (TSA_REF, ("speed_rpm", "torque_nm", "residual_profile"))}
+            "tsa_ref_res": (TSA_REF, ("speed_rpm", "torque_nm", "residual_profile")),
+            # the TSA and its residual whitened by the reference's mesh harmonics (models.tsa.mesh_whitening)
+            "tsa_ref_w_op": (dataclasses.replace(TSA_REF, whiten=True), ("speed_rpm", "torque_nm"))}
 MESH_ORDER_REF = {"mesh_order_ref": (RepresentationSpec(kind="mesh_order", n_mesh_periods=256, max_order=4.0,
                                                         reference=True), ())}
 REAL = ROOT.parent / "shared" / "data" / "spectraquest_gfd"
@@ -119,23 +121,34 @@ def cached_table(data, cfg: dict, path: Path, jobs: int) -> tuple[np.ndarray, li
     return x, names
 
 
-def baselines(train, tests: dict, tag: str, jobs: int) -> dict:
+def baselines(parts: dict, train_rows: dict, test_rows: dict, foreign, channel: str, jobs: int) -> dict:
     """The three feature-table baselines on the table read against the reference
     (:mod:`models.reference_features`) and, as the control, on the record's own columns of the same table (the
-    baselines of ``eval_protocol``); the best of each chosen on an internal 80/20 split of the training part."""
+    baselines of ``eval_protocol``); the best of each chosen on an internal 80/20 split of the training part.
+
+    ``parts``: name -> SignalSet (the sweep's draws), each tabulated once (cached under ``OUT / "features"``);
+    ``train_rows``: part name -> its training rows; ``test_rows``: test name -> rows of ``parts["draw1"]``;
+    ``foreign``: a further test set or None."""
     from eval_protocol import baseline_runs
     from models.baselines import feature_config_for
+    from models.data import concat
 
-    cfg = feature_config_for(train, reference=True)
-    x, names = cached_table(train, cfg, OUT / "features" / f"{tag}_train.npz", jobs)
-    xt = {k: cached_table(v, cfg, OUT / "features" / f"{tag}_{k}.npz", jobs)[0] for k, v in tests.items()}
+    first = next(iter(parts.values()))
+    cfg = feature_config_for(first, reference=True)
+    tab = {k: cached_table(v, cfg, OUT / "features" / f"{channel}_{k}.npz", jobs) for k, v in parts.items()}
+    names = tab[next(iter(tab))][1]
+    x = np.vstack([tab[k][0][r] for k, r in train_rows.items()])
+    train = concat([parts[k].subset(r) for k, r in train_rows.items()])
+    tests = {k: (parts["draw1"].subset(r), tab["draw1"][0][r]) for k, r in test_rows.items()}
+    if foreign is not None:
+        tests["foreign"] = (foreign, cached_table(foreign, cfg, OUT / "features" / f"{channel}_foreign.npz", jobs)[0])
     own = int(sum(not n.startswith(("delta:", "residual:")) for n in names))
     plain = {k: v for k, v in cfg.items() if k != "reference"}
-    return {"reference": baseline_runs(train, x, {k: (tests[k], xt[k]) for k in tests}, names, cfg,
-                                       OUT / f"baselines_ref_{tag}"),
-            "record_alone": baseline_runs(train, x[:, :own], {k: (tests[k], xt[k][:, :own]) for k in tests},
-                                          names[:own], plain, OUT / f"baselines_{tag}"),
-            "n_features": {"reference": len(names), "record_alone": own}}
+    tag = "_".join(sorted(train_rows)) + "_" + "_".join(sorted(test_rows))
+    return {"reference": baseline_runs(train, x, tests, names, cfg, OUT / f"baselines_ref_{channel}_{tag}"),
+            "record_alone": baseline_runs(train, x[:, :own], {k: (t, v[:, :own]) for k, (t, v) in tests.items()},
+                                          names[:own], plain, OUT / f"baselines_{channel}_{tag}"),
+            "n_features": {"reference": len(names), "record_alone": own}, "n_train": len(train)}
 
 
 def main(argv=None) -> int:
@@ -174,6 +187,7 @@ def main(argv=None) -> int:
     assert data.reference is not None, "the training sweep must store healthy twins"
     tr, te = stratified_split(strata(data), 0.3, SEED)
     tests = {"in_domain": data.subset(te)}
+    parts, train_rows, test_rows = {"draw1": data}, {"draw1": tr}, {"in_domain": te}   # for the baselines
     if "foreign" not in args.skip:
         from foreign_classifier_check import write_folder
 
@@ -186,11 +200,14 @@ def main(argv=None) -> int:
         from sensor_protocol import second_draw, training_and_test
 
         more = second_draw(DATA_OUT / "data", args.channel, base=TRAIN)
+        parts["draw2"] = more
         if args.split == "in_domain":
             train = concat([train, more])
+            train_rows["draw2"] = np.arange(len(more))
         else:
-            train, test, _ = training_and_test(args.split, data, more)
+            train, test, (tr1, te1, tr2) = training_and_test(args.split, data, more)
             tests = {args.split: test}
+            train_rows, test_rows = {"draw1": tr1, "draw2": tr2}, {args.split: te1}
     if args.train_seed is not None:       # cnn_run reads the protocol's seed when it trains
         import eval_protocol
         eval_protocol.SEED = args.train_seed
@@ -204,8 +221,8 @@ def main(argv=None) -> int:
                                       f"{'' if args.train_seed is None else f'_seed{args.train_seed}'}",
                                       variants=VARIANTS)
     if args.baselines:
-        tag = "_".join([args.channel or "acc", "more" if args.more else "protocol", args.split])
-        res["baselines"] = baselines(train, tests, tag, args.jobs)
+        res["baselines"] = baselines(parts, train_rows, test_rows, tests.get("foreign"), args.channel or "acc",
+                                     args.jobs)
     if "real" not in args.skip:
         real = {ch: real_with_references(ch) for ch in ("a1", "a2", "a3", "a4")}
         if all(v is not None for v in real.values()):

@@ -140,6 +140,13 @@ class RepresentationSpec:
     reference : bool
         Read each record relative to its healthy reference (module docstring;
         ``order``, ``mesh_order``, ``tsa``); the records are then pairs.
+    whiten : bool
+        ``tsa`` with ``reference`` only: divide every order of the record's TSA
+        and of its residual by the reference's amplitude at the nearest mesh
+        harmonic (:func:`models.tsa.mesh_whitening`): each harmonic region is
+        read relative to the healthy mesh excitation that passed the same
+        sensor path, so a housing resonance no longer sets which region the
+        network sees.
     """
 
     kind: Kind = "order"
@@ -152,6 +159,7 @@ class RepresentationSpec:
     highpass_orders: float = 0.0
     remove_shaft_1x: bool = False
     reference: bool = False
+    whiten: bool = False
 
     def __post_init__(self):
         require(self.kind in KINDS, "representation.kind", self.kind, "one of: " + ", ".join(KINDS))
@@ -177,6 +185,10 @@ class RepresentationSpec:
         require(not self.reference or self.kind in REFERENCE_KINDS, "representation.reference", self.reference,
                 f"false for representation {self.kind!r} (only " + ", ".join(REFERENCE_KINDS)
                 + " are read against a reference)")
+
+        require(isinstance(self.whiten, (bool, np.bool_)), "representation.whiten", self.whiten, "true or false")
+        require(not self.whiten or (self.kind == "tsa" and self.reference), "representation.whiten", self.whiten,
+                "false unless kind = 'tsa' and reference = true (the whitening reads the reference's mesh harmonics)")
 
     @classmethod
     def from_dict(cls, values: dict) -> "RepresentationSpec":
@@ -300,7 +312,8 @@ def _crops(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, shaft_hz: floa
         comb = _tsa_comb(x, spec, fs_hz, shaft_hz * speed_factor, starts, z_pinion, z_wheel)
         if ref is not None:
             ref_comb = _tsa_comb(ref, spec, fs_hz, shaft_hz * speed_factor, (0.0,), z_pinion, z_wheel)[0]
-            return tsa_against_reference(comb, ref_comb, spec.samples_per_rev)[0]
+            return tsa_against_reference(comb, ref_comb, spec.samples_per_rev,
+                                         whiten_z=z_pinion if spec.whiten else None)[0]
         return _tsa_normalised(comb, spec.samples_per_rev, z_pinion)[0]
     if k == "order":
         # bin j of the segment is shaft order j * (revolutions in the segment)^-1

@@ -167,16 +167,64 @@ def align_comb(comb: np.ndarray, ref: np.ndarray) -> np.ndarray:
     return ref[None, :] * np.exp(-1j * k[None, :] * d[:, None])
 
 
-def tsa_against_reference(comb: np.ndarray, ref_comb: np.ndarray, samples_per_rev: int
-                          ) -> tuple[np.ndarray, np.ndarray]:
+#: whitening by the reference (``RepresentationSpec.whiten``): the regularisation of one over a mesh harmonic,
+#: as a fraction of the strongest (40 dB, as :data:`models.representations.REFERENCE_CLIP`): a harmonic the
+#: reference does not hold above it (beyond the sensor's band, above the sampling rate's reach) is weighted down
+WHITEN_FLOOR = 1e-2
+
+
+def mesh_whitening(ref_comb: np.ndarray, z_pinion: int) -> np.ndarray:
+    """Complex weights ``(n_rows, K + 1)`` for orders ``0 .. K`` of each row of ``ref_comb`` (a reference's TSA
+    comb, already turned to its record, :func:`align_comb`): one over the reference's mesh harmonics, regularised
+    (``conj(a) / (|a|^2 + (f a_max)^2)``, ``f`` = :data:`WHITEN_FLOOR`: a harmonic that the reference does not
+    hold above that is weighted down, not blown up), its modulus interpolated in log between the harmonics and
+    its phase that of the nearest harmonic (the first for the orders below it, the last above the last).
+
+    Why: between a gear's vibration and an accelerometer lies the sensor path ``H`` (housing resonances,
+    mounting), which lifts some mesh harmonics by tens of dB and turns their phases; a pit's excitation, spread
+    over the orders around every harmonic, reaches the sensor through the same path. A record's order ``k`` is
+    ``H_k X_k``, the reference's harmonic ``h`` is ``H_h X0_h``; their quotient is ``(X_k / X0_h)(H_k / H_h)``,
+    and the path is smooth over one harmonic's sidebands (``H_k ~ H_h``), so every harmonic region is read
+    relative to the healthy mesh excitation that passed the same path: the shape no longer depends on where the
+    path's resonance lies. With no mesh harmonic in the comb the weights are 1."""
+    ref = np.atleast_2d(np.asarray(ref_comb))
+    z = int(z_pinion)
+    K = ref.shape[1] - 1
+    H = K // z
+    if H < 1:
+        return np.ones(ref.shape)
+    harm = ref[:, z * np.arange(1, H + 1)]                                # (n_rows, H)
+    top = np.abs(harm).max(axis=1, keepdims=True)
+    if not np.all(top > 0):
+        return np.ones(ref.shape)
+    w = np.conj(harm) / (np.abs(harm) ** 2 + (WHITEN_FLOOR * top) ** 2)  # regularised 1 / harm
+    # modulus interpolated in log between the harmonics (the path's slope across a harmonic's sidebands), phase
+    # of the nearest harmonic
+    orders = np.arange(K + 1)
+    mag = np.exp(np.stack([np.interp(orders, z * np.arange(1, H + 1), np.log(np.abs(row) + 1e-300)) for row in w]))
+    h = np.clip(np.rint(orders / z).astype(int), 1, H)
+    return mag * np.exp(1j * np.angle(w[:, h - 1]))
+
+
+def tsa_against_reference(comb: np.ndarray, ref_comb: np.ndarray, samples_per_rev: int, *,
+                          whiten_z: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The ``tsa`` representation read against a reference (:mod:`models.representations`): for each crop's
     comb, the record's TSA and its residual, the TSA less the reference's aligned one (:func:`align_comb`),
     both over the reference TSA's standard deviation: ``(n_crops, 2, samples_per_rev)``; and the residual combs
-    ``(n_crops, K + 1)``."""
-    residual = comb - align_comb(comb, ref_comb)
-    sd = float(np.fft.irfft(ref_comb, n=samples_per_rev).std()) or 1.0
-    avg = np.fft.irfft(comb, n=samples_per_rev, axis=-1)
-    res = np.fft.irfft(residual, n=samples_per_rev, axis=-1)
+    ``(n_crops, K + 1)`` (not whitened). ``whiten_z``: the pinion's teeth, to whiten all three by the aligned
+    reference's mesh harmonics first (:func:`mesh_whitening`)."""
+    aligned = align_comb(comb, ref_comb)
+    residual = comb - aligned
+    if whiten_z is None:
+        sd = float(np.fft.irfft(ref_comb, n=samples_per_rev).std()) or 1.0
+        avg = np.fft.irfft(comb, n=samples_per_rev, axis=-1)
+        res = np.fft.irfft(residual, n=samples_per_rev, axis=-1)
+    else:
+        w = mesh_whitening(aligned, whiten_z)
+        sd = np.fft.irfft(aligned * w, n=samples_per_rev, axis=-1).std(axis=-1, keepdims=True)
+        sd = np.where(sd > 0, sd, 1.0)
+        avg = np.fft.irfft(comb * w, n=samples_per_rev, axis=-1)
+        res = np.fft.irfft(residual * w, n=samples_per_rev, axis=-1)
     return np.stack([(avg - avg.mean(axis=-1, keepdims=True)) / sd, (res - res.mean(axis=-1, keepdims=True)) / sd],
                     axis=1), residual
 
@@ -224,7 +272,7 @@ def represent_crops_and_residual(pairs: np.ndarray, spec: RepresentationSpec, *,
         rec, ref, sd = _split_pair(x[i])
         comb = _tsa_comb(rec, spec, float(fs_hz), float(fr[i]), st, zp, zw)
         ref_comb = _tsa_comb(ref, spec, float(fs_hz), float(fr[i]), (0.0,), zp, zw)[0]
-        rep[i], residual = tsa_against_reference(comb, ref_comb, spr)
+        rep[i], residual = tsa_against_reference(comb, ref_comb, spr, whiten_z=zp if spec.whiten else None)
         diff[i] = _tsa_channels(residual[:1], spr, zp)[1][0] * sd
     return rep, diff
 
