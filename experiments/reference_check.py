@@ -241,9 +241,10 @@ def main(argv=None) -> int:
     for variant, r in res["cnn"].items():
         print(f"| CNN {variant} | " + " | ".join(f"{100 * r[k]['accuracy']:.1f} / {100 * r[k]['teeth_accuracy']:.1f}"
                                                 for k in tests) + " |")
-    for group, r in res.get("baselines", {}).items():
-        if group == "n_features":
+    for group in ("reference", "record_alone"):
+        if group not in res.get("baselines", {}):
             continue
+        r = res["baselines"][group]
         best = r["best"]
         print(f"| baseline {best} ({group.replace('_', ' ')}) | " + " | ".join(
             f"{100 * r[best][k]['accuracy']:.1f} / {100 * r[best][k]['teeth_accuracy']:.1f}" for k in tests) + " |")
