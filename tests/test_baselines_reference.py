@@ -107,21 +107,14 @@ def test_save_load_and_refusals(machines, tables, tmp_path):
 
 def test_cli_trains_a_baseline_against_the_reference(machines, tmp_path, capsys):
     """``gearpit train --model logreg --reference`` on a dataset with healthy twins: the model reads the twins,
-    and ``evaluate`` on its 20 training machines scores >= 90 %."""
-    from datagen.dataset import finalize, write_shard
+    ``evaluate`` on its 20 training machines scores >= 90 %, and ``predict`` reads a measurement file's
+    reference from its sidecar (without it: refused, naming the reference)."""
     from gearpit.cli import main
+    from toy_files import write_toy_dataset, write_toy_measurement
 
     train = machines[0].subset(np.arange(40))   # 20 machines
     root = tmp_path / "ds"
-    (root / "shards").mkdir(parents=True)
-    n = len(train)
-    meta = {"format": "gearpit-dataset", "format_version": 1, "name": "toy", "channels": ["acc", "acc@reference"],
-            "fs_hz": train.fs_hz, "n_time": train.n_samples, "n_samples": n, "shard_size": n, "n_shards": 1,
-            "pairs": {"toy": {"z_pinion": 13, "z_wheel": 29}}}
-    (root / "metadata.json").write_text(json.dumps(meta))
-    rows = train.labels.assign(sample_index=np.arange(n), pair="toy").to_dict(orient="records")
-    write_shard(root, 0, np.stack([train.signals, train.reference], axis=1), rows, [])
-    finalize(root)
+    write_toy_dataset(root, train)
     assert main(["train", str(root), "--out", str(tmp_path / "m"), "--model", "logreg", "--reference",
                  "--task", "binary"]) == 0
     spec = json.loads((tmp_path / "m" / "model.json").read_text())
@@ -129,3 +122,12 @@ def test_cli_trains_a_baseline_against_the_reference(machines, tmp_path, capsys)
     assert any(n.startswith("residual:") for n in spec["representation"]["feature_names"])
     assert main(["evaluate", str(tmp_path / "m"), str(root), "--out", str(tmp_path / "ev")]) == 0
     assert json.loads((tmp_path / "ev" / "metrics.json").read_text())["severity_class"]["accuracy"] >= 0.9
+    meas = tmp_path / "meas"
+    write_toy_measurement(meas, train)
+    capsys.readouterr()
+    rc = main(["predict", str(tmp_path / "m"), str(meas / "rec.npz"), "--json", "--sidecar-speed"])
+    cap = capsys.readouterr()
+    assert rc == 0, cap.err
+    assert json.loads(cap.out.strip().splitlines()[-1])["severity_class"] in ("healthy", "damaged")
+    rc = main(["predict", str(tmp_path / "m"), str(meas / "ref.npz"), "--json", "--sidecar-speed"])
+    assert rc == 2 and "reference" in capsys.readouterr().err

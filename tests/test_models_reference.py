@@ -192,22 +192,12 @@ def test_train_evaluate_predict_with_references_through_the_cli(machines, tmp_pa
     twins is refused before training, naming the reference."""
     import json
 
-    from datagen.dataset import finalize, write_shard
-    from datagen.geometry import preset
     from gearpit.cli import main
+    from toy_files import write_toy_dataset, write_toy_measurement
 
     train = machines[0]
     root = tmp_path / "ds"
-    root.mkdir()
-    (root / "shards").mkdir()
-    n = len(train)
-    meta = {"format": "gearpit-dataset", "format_version": 1, "name": "toy", "channels": ["acc", "acc@reference"],
-            "fs_hz": train.fs_hz, "n_time": train.n_samples, "n_samples": n, "shard_size": n, "n_shards": 1,
-            "pairs": {"toy": {"z_pinion": 13, "z_wheel": 29}}}
-    (root / "metadata.json").write_text(json.dumps(meta))
-    rows = train.labels.assign(sample_index=np.arange(n), pair="toy").to_dict(orient="records")
-    write_shard(root, 0, np.stack([train.signals, train.reference], axis=1), rows, [])
-    finalize(root)
+    write_toy_dataset(root, train)
     cfg = tmp_path / "train.toml"
     cfg.write_text('[train]\nmax_epochs = 20\npatience = 20\nbatch_size = 16\nlearning_rate = 3e-3\ntask = "binary"\n'
                    'widths = [8, 16, 16, 24, 32]\nhidden = 32\n'
@@ -220,15 +210,7 @@ def test_train_evaluate_predict_with_references_through_the_cli(machines, tmp_pa
     assert json.loads((tmp_path / "ev" / "metrics.json").read_text())["severity_class"]["accuracy"] >= 0.9
     # measurement files: the record and its reference as NPZ + sidecars
     meas = tmp_path / "meas"
-    meas.mkdir()
-    for name, x in (("rec", train.signals[0]), ("ref", train.reference[0])):
-        np.savez(meas / f"{name}.npz", acc=x)
-        pair = preset("spur-gds").to_dict()
-        pair.update(name="toy13", pinion={**pair["pinion"], "teeth": 13, "profile_shift": 0.3, "bore_radius_mm": 6.0}, wheel={**pair["wheel"], "teeth": 29, "bore_radius_mm": 15.0})
-        side = {"pair": pair,
-                "speed_rpm": float(train.labels.speed_rpm[0]), "torque_nm": 50.0, "fs_hz": train.fs_hz,
-                "sensor": "acc"}
-        (meas / f"{name}.json").write_text(json.dumps({**side, **({"reference": "ref.npz"} if name == "rec" else {})}))
+    write_toy_measurement(meas, train)
     capsys.readouterr()
     rc = main(["predict", str(tmp_path / "m"), str(meas / "rec.npz"), "--json", "--sidecar-speed"])
     cap = capsys.readouterr()
@@ -236,11 +218,7 @@ def test_train_evaluate_predict_with_references_through_the_cli(machines, tmp_pa
     assert rc == 0, cap.err
     assert json.loads(out.strip().splitlines()[-1])["severity_class"] in ("healthy", "damaged")
     plain = tmp_path / "plain"
-    plain.mkdir()
-    (plain / "shards").mkdir()
-    (plain / "metadata.json").write_text(json.dumps({**meta, "channels": ["acc"]}))
-    write_shard(plain, 0, train.signals[:, None, :], rows, [])
-    finalize(plain)
+    write_toy_dataset(plain, train, references=False)
     capsys.readouterr()
     assert main(["train", str(plain), "--out", str(tmp_path / "m2"), "--config", str(cfg), "--reference",
                  "--quiet"]) == 2
