@@ -73,7 +73,7 @@ def _run(trials: list[tuple[Search, Trial]], ref: Reference, model, settings, tr
     for s, t in trials:
         try:
             e = s.build(t)
-            if not transient and t.choice != s.default_choice and _period_s(ref, model, e) > len(ref.x) / ref.fs_hz:
+            if not transient and t.choice != s.default_choice and record_period_s(ref, model, e) > len(ref.x) / ref.fs_hz:
                 t.note = "record period longer than the measurement: not tried"
                 s.trials.append(t)
                 continue
@@ -113,7 +113,7 @@ def _run(trials: list[tuple[Search, Trial]], ref: Reference, model, settings, tr
     return base
 
 
-def _period_s(ref: Reference, model, effect) -> float:
+def record_period_s(ref: Reference, model, effect) -> float:
     """Steady-state record period (s) of the model plus ``effect`` (e.g. the hunting period when both gears
     carry errors); trying a string option whose period exceeds the measurement would cost more than it tells."""
     from datagen.simulate import prepare
