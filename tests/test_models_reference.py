@@ -193,7 +193,7 @@ def test_train_evaluate_predict_with_references_through_the_cli(machines, tmp_pa
     import json
 
     from gearpit.cli import main
-    from toy_files import write_toy_dataset, write_toy_measurement
+    from toy_files import evaluate_and_predict, write_toy_dataset
 
     train = machines[0]
     root = tmp_path / "ds"
@@ -206,17 +206,8 @@ def test_train_evaluate_predict_with_references_through_the_cli(machines, tmp_pa
                  "--quiet"]) == 0
     spec = json.loads((tmp_path / "m" / "model.json").read_text())
     assert spec["representation"]["reference"] is True
-    assert main(["evaluate", str(tmp_path / "m"), str(root), "--out", str(tmp_path / "ev")]) == 0
-    assert json.loads((tmp_path / "ev" / "metrics.json").read_text())["severity_class"]["accuracy"] >= 0.9
-    # measurement files: the record and its reference as NPZ + sidecars
-    meas = tmp_path / "meas"
-    write_toy_measurement(meas, train)
-    capsys.readouterr()
-    rc = main(["predict", str(tmp_path / "m"), str(meas / "rec.npz"), "--json", "--sidecar-speed"])
-    cap = capsys.readouterr()
-    out = cap.out
-    assert rc == 0, cap.err
-    assert json.loads(out.strip().splitlines()[-1])["severity_class"] in ("healthy", "damaged")
+    # evaluate on the dataset; predict a measurement file (record + reference as NPZ, sidecars)
+    evaluate_and_predict(tmp_path / "m", root, train, tmp_path, capsys)
     plain = tmp_path / "plain"
     write_toy_dataset(plain, train, references=False)
     capsys.readouterr()

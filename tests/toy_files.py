@@ -38,3 +38,21 @@ def write_toy_measurement(folder, data, i: int = 0) -> None:
     for name, x in (("rec", data.signals[i]), ("ref", data.reference[i])):
         np.savez(folder / f"{name}.npz", acc=x)
         (folder / f"{name}.json").write_text(json.dumps({**side, **({"reference": "ref.npz"} if name == "rec" else {})}))
+
+
+def evaluate_and_predict(model_dir, root, data, tmp_path, capsys):
+    """What every referenced model must do through the CLI: ``gearpit evaluate`` on the toy dataset ``root`` (its
+    training machines) scores >= 90 % healthy vs damaged, and ``gearpit predict`` reads a measurement file's
+    reference from its sidecar and names a class. Returns the measurement folder (``rec``/``ref`` files)."""
+    from gearpit.cli import main
+
+    assert main(["evaluate", str(model_dir), str(root), "--out", str(tmp_path / "ev")]) == 0
+    assert json.loads((tmp_path / "ev" / "metrics.json").read_text())["severity_class"]["accuracy"] >= 0.9
+    meas = tmp_path / "meas"
+    write_toy_measurement(meas, data)
+    capsys.readouterr()
+    rc = main(["predict", str(model_dir), str(meas / "rec.npz"), "--json", "--sidecar-speed"])
+    cap = capsys.readouterr()
+    assert rc == 0, cap.err
+    assert json.loads(cap.out.strip().splitlines()[-1])["severity_class"] in ("healthy", "damaged")
+    return meas
