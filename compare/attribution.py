@@ -35,7 +35,7 @@ from compare.candidates import (Attribution, AttributionSettings, CandidateResul
 from compare.comparison import NOISE_DRAWS, Reference, evaluate, simulate_model
 from compare.error import effective_count
 from compare.fitspace import CHAIN_EFFECTS, fit_space
-from compare.fitting import record_period_s, explained_keys, search_group, transient_groups, window_label
+from compare.fitting import explained_keys, record_period_s, search_group, transient_groups, window_label
 from gearpit.errors import GearpitError
 
 __all__ = ["attribute", "Attribution", "AttributionSettings", "CandidateResult", "choose_claim", "rivals_of",
