@@ -142,13 +142,13 @@ def test_candidates_that_would_repeat_only_over_the_hunting_period_are_fitted_ti
     """compare.attribution.long_period_candidates. Source: the pair's kinematics. With a wheel eccentricity in the
     model (its record repeats every wheel revolution, 100 mesh cycles), a pinion eccentricity or a pinion pitch
     error makes it repeat only over the hunting period, 100 pinion revolutions (6 s at 1000 rpm, longer than the
-    2 s measurement): those two go to the time-stepped fit; an error of every tooth alike (profile error, tip
+    1 s measurement): those two go to the time-stepped fit; an error of every tooth alike (profile error, tip
     relief) keeps the wheel's period and stays periodic. The bare model (its record repeats every mesh cycle)
     sends nothing there."""
     from compare.attribution import long_period_candidates
     from datagen.effects import build_effects
 
-    m = rig_measurement((), duration_s=2.0)
+    m = rig_measurement((), duration_s=1.0)
     ref = prepare_reference(m)
     pool = ["pitch_error", "eccentricity_pinion", "profile_error", "tip_relief"]
     ecc = ComparisonModel(effects=build_effects(({"name": "eccentricity_wheel", "amplitude_m": 5e-5},)))
