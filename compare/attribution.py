@@ -26,6 +26,7 @@ are fitted at the calibrated nuisances without refit.
 from __future__ import annotations
 
 import math
+import pickle
 import time
 
 import numpy as np
@@ -51,6 +52,12 @@ def _search_and_confirm(names_: list, ref: Reference, model, settings, disagreem
     r, n, _ = search_group(names_, ref, model, settings, True, disagreements, n_eff, seed_residual)
     n += _confirm_on_record(r, ref, model, settings, list(disagreements))
     return r, n, time.perf_counter() - t0
+
+
+def _search_and_confirm_payload(names_: list, payload: bytes):
+    """:func:`_search_and_confirm` in a worker process, its other arguments pickled by the caller."""
+    args, tail = pickle.loads(payload)
+    return _search_and_confirm(names_, *args, *tail)
 
 
 def attribute(ref: Reference, model, baseline_residual: np.ndarray, *, candidates=None,
@@ -100,7 +107,12 @@ def attribute(ref: Reference, model, baseline_residual: np.ndarray, *, candidate
 
         groups = transient_groups(transient)
         executor = cf.ProcessPoolExecutor(max_workers=len(groups), mp_context=mp.get_context("fork"))
-        futures = [executor.submit(_search_and_confirm, g, *args, *tail) for g in groups]
+        # the arguments pickled here, before the periodic fits below start: the executor pickles a submitted
+        # call in a feeder thread, and the periodic fits fill cached properties of objects the arguments hold
+        # (the gear pair's geometry), so pickling them there raced with this thread ("dictionary changed size
+        # during iteration", seen on the foreign rig's loop)
+        payload = pickle.dumps((args, tail))
+        futures = [executor.submit(_search_and_confirm_payload, g, payload) for g in groups]
     elif transient:
         r, n, seconds["time_stepped"] = _search_and_confirm(transient, *args, *tail)
         results += r
