@@ -36,7 +36,8 @@ from compare.candidates import (Attribution, AttributionSettings, CandidateResul
 from compare.comparison import NOISE_DRAWS, Reference, evaluate, simulate_model
 from compare.error import effective_count
 from compare.fitspace import CHAIN_EFFECTS, fit_space
-from compare.fitting import explained_keys, record_period_s, search_group, transient_groups, window_label
+from compare.fitting import (explained_keys, prepared_case, record_period_s, search_group, transient_groups,
+                             window_label)
 from gearpit.errors import GearpitError
 
 __all__ = ["attribute", "Attribution", "AttributionSettings", "CandidateResult", "choose_claim", "rivals_of",
@@ -155,13 +156,8 @@ def long_period_candidates(names_: list, ref: Reference, model) -> list:
     cycle cannot make such a pair (a candidate alone repeats within a wheel revolution), so nothing is checked
     then (and nothing costs)."""
     from datagen.effects import get
-    from datagen.simulate import prepare
 
-    m = ref.measurement
-    dur = ref.model_duration_s()
-    case = model.case(m.pair, speed_rpm=ref.speed.speed_rpm, torque_nm=m.torque_nm, duration_s=dur, fs_hz=m.fs_hz)
-    own = prepare(case)
-    if own.record.period_cycles <= 1:
+    if prepared_case(ref, model).record.period_cycles <= 1:
         return []
     record_s = len(ref.x) / ref.fs_hz
     out = []

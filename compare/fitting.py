@@ -113,15 +113,21 @@ def _run(trials: list[tuple[Search, Trial]], ref: Reference, model, settings, tr
     return base
 
 
-def record_period_s(ref: Reference, model, effect) -> float:
-    """Steady-state record period (s) of the model plus ``effect`` (e.g. the hunting period when both gears
-    carry errors); trying a string option whose period exceeds the measurement would cost more than it tells."""
+def prepared_case(ref: Reference, model, extra_effects=()):
+    """The model (plus ``extra_effects``) at the measurement's operating point, prepared for the solver
+    (:func:`datagen.simulate.prepare`: its record period, distinct mesh cycles, chosen method), not simulated."""
     from datagen.simulate import prepare
 
     m = ref.measurement
     case = model.case(m.pair, speed_rpm=ref.speed.speed_rpm, torque_nm=m.torque_nm, duration_s=ref.model_duration_s(),
-                      fs_hz=m.fs_hz, extra_effects=(effect,))
-    return float(prepare(case).period_s)
+                      fs_hz=m.fs_hz, extra_effects=tuple(extra_effects))
+    return prepare(case)
+
+
+def record_period_s(ref: Reference, model, effect) -> float:
+    """Steady-state record period (s) of the model plus ``effect`` (e.g. the hunting period when both gears
+    carry errors); trying a string option whose period exceeds the measurement would cost more than it tells."""
+    return float(prepared_case(ref, model, (effect,)).period_s)
 
 
 def transient_groups(names_: list) -> list[list]:

@@ -133,10 +133,9 @@ def baselines(parts: dict, train_rows: dict, test_rows: dict, foreign, channel: 
     from models.baselines import feature_config_for
     from models.data import concat
 
-    first = next(iter(parts.values()))
-    cfg = feature_config_for(first, reference=True)
+    cfg = feature_config_for(parts["draw1"], reference=True)
     tab = {k: cached_table(v, cfg, OUT / "features" / f"{channel}_{k}.npz", jobs) for k, v in parts.items()}
-    names = tab[next(iter(tab))][1]
+    names = tab["draw1"][1]
     x = np.vstack([tab[k][0][r] for k, r in train_rows.items()])
     train = concat([parts[k].subset(r) for k, r in train_rows.items()])
     tests = {k: (parts["draw1"].subset(r), tab["draw1"][0][r]) for k, r in test_rows.items()}

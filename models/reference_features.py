@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from features.statistics import crest_factor, kurtosis, rms
 from gearpit.errors import require
 from models.representations import RepresentationSpec
 from models.tooth_profile import FEATURE_NAMES as PROFILE_NAMES, profile_of_difference
@@ -56,14 +57,10 @@ def residual_indicators(data) -> np.ndarray:
     d = residual_difference(data.signals, data.reference, RESIDUAL_SPEC, fs_hz=data.fs_hz, shaft_hz=fr,
                             z_pinion=zp, z_wheel=zw)
     own = tsa_difference(data.reference, RESIDUAL_SPEC, fs_hz=data.fs_hz, shaft_hz=fr, z_pinion=zp, z_wheel=zw)
-    ref = np.asarray(data.reference, dtype=float)
-    r = np.sqrt(np.mean(d ** 2, axis=1))
-    r_own = np.sqrt(np.mean(own ** 2, axis=1))
-    r_ref = ref.std(axis=1)
-    fm4 = np.mean(d ** 4, axis=1) / np.maximum(r ** 4, TINY)
-    crest = np.abs(d).max(axis=1) / np.maximum(r, TINY)
+    r, r_own = rms(d), rms(own)
+    r_ref = np.asarray(data.reference, dtype=float).std(axis=1)
     cols = np.column_stack([np.log10(np.maximum(r, TINY) / np.maximum(r_own, TINY)),
-                            np.log10(np.maximum(r, TINY) / np.maximum(r_ref, TINY)), fm4, crest])
+                            np.log10(np.maximum(r, TINY) / np.maximum(r_ref, TINY)), kurtosis(d), crest_factor(d)])
     return np.hstack([cols, profile_of_difference(d, zp)])
 
 
