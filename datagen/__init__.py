@@ -14,6 +14,7 @@
 - ``newmark``          batched average-acceleration Newmark with the rank-one mesh term (+ Newton)
 - ``shooting``         periodic steady state of linear constant-speed cases
 - ``time_stepping``    start-up transient + kept record for nonlinear / non-stationary cases
+- ``compiled_stepping``  the time-stepping loop compiled (numba); the numpy loop of ``newmark`` is its reference
 - ``dynamics``         picks the path and batches cases
 - ``output_channels``, ``decimation``  channels, anti-alias filtering and decimation to fs
 - ``simulate``   THE orchestrator: Case -> Signals (CLI, datasets, comparison and tests call it)

@@ -26,6 +26,10 @@ from datagen.effects.base import MeshState
 from datagen.mesh_excitation import MeshRecords
 from datagen.output_channels import channel_coefficients, channel_names, channel_values, finish
 
+#: run the time-stepping loop compiled where the batch's mesh laws allow it (:mod:`datagen.compiled_stepping`);
+#: False: the numpy loop of :func:`datagen.newmark.run_general` (the reference the tests compare against)
+COMPILED = True
+
 
 def transient_response(cases, R: int, n_discard: int) -> list[Response]:
     C = len(cases)
@@ -136,7 +140,16 @@ def transient_response(cases, R: int, n_discard: int) -> list[Response]:
     kept, theta_out = [], []
     bad_total = 0
     first = n_discard - D
-    for i0, traj, force, bad in newmark.run_general(batch, S0, n_total, CHUNK, inputs, mesh_force):
+    law = _compiled_law(nonlinear, C) if COMPILED else None
+    if law is not None:               # the same loop compiled (datagen.compiled_stepping)
+        from datagen import compiled_stepping
+
+        mesh = compiled_stepping.CompiledMesh(records, z1_per_rad, dynamic, np.asarray(x_static, float), i_phi1,
+                                              np.asarray(c_m, float), *law)
+        steps = compiled_stepping.run_general(batch, S0, n_total, CHUNK, inputs, lambda: theta_steps["theta"], mesh)
+    else:
+        steps = newmark.run_general(batch, S0, n_total, CHUNK, inputs, mesh_force)
+    for i0, traj, force, bad in steps:
         bad_total += bad
         L = traj.shape[0]
         steps = i0 + 1 + np.arange(L)                     # step index of each sample
@@ -160,6 +173,22 @@ def transient_response(cases, R: int, n_discard: int) -> list[Response]:
             "natural_frequencies_hz": c.model.natural_frequencies_hz.tolist(),
             "mesh_damping_n_s_per_m": c.model.c_mesh_n_s_per_m}))
     return out
+
+
+def _compiled_law(nonlinear, C: int):
+    """``(law, law_row, law_params)`` of :class:`datagen.compiled_stepping.CompiledMesh` for a batch whose
+    nonlinear cases (``nonlinear``: :func:`_nonlinear_groups`) all carry one effect class with a compiled
+    ``scalar_mesh_law``; None otherwise (the numpy loop runs)."""
+    from datagen.compiled_stepping import linear_law
+
+    row = np.full(C, -1, dtype=np.int64)
+    if not nonlinear:
+        return linear_law, row, np.zeros((1, 1))
+    if len(nonlinear) > 1 or getattr(nonlinear[0][0], "scalar_mesh_law", None) is None:
+        return None
+    cls, idx, params = nonlinear[0]
+    row[idx] = np.arange(idx.size)
+    return cls.scalar_mesh_law, row, np.column_stack([np.asarray(v, dtype=float) for v in params.values()])
 
 
 def _nonlinear_groups(cases):

@@ -16,8 +16,30 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 from datagen.effects.base import Effect, Fit, register
+
+
+@njit(cache=True)
+def _scalar_law(p, delta, delta_dot, k, c, e_force, k_slots, e_slots):
+    """:meth:`Backlash.mesh_force_batch` for one case (``p[0]``: the backlash), compiled for the time-stepping
+    loop (:mod:`datagen.compiled_stepping`)."""
+    b = p[0]
+    elastic = 0.0
+    k_touch = 0.0
+    total = 0.0
+    for s in range(k_slots.size):
+        d = delta - e_slots[s]
+        total += k_slots[s]
+        if d > 0.0:
+            elastic += k_slots[s] * d
+            k_touch += k_slots[s]
+        elif d < -b:
+            elastic += k_slots[s] * (d + b)
+            k_touch += k_slots[s]
+    c_touch = c * (k_touch / max(total, 1e-30))
+    return elastic + c_touch * delta_dot, k_touch, c_touch
 
 
 @register
@@ -35,6 +57,7 @@ class Backlash(Effect):
     signature = "at light load/high speed: contact loss -> impacts, broadband rattle, sub/superharmonics of fm"
     fit_parameters = (Fit("backlash_m", scale="log"),)
     backlash_m: float = field(default=100e-6, metadata={"unit": "m", "bounds": (0.0, 1e-3)})
+    scalar_mesh_law = staticmethod(_scalar_law)
 
     @classmethod
     def mesh_force_batch(cls, params, delta_m, delta_dot_m_s, mesh):

@@ -1,0 +1,199 @@
+"""The time-stepping loop of :func:`datagen.newmark.run_general`, compiled (numba), for the ``transient`` path.
+
+Why
+---
+A time-stepped record (speed or torque fluctuation, backlash, a candidate whose record repeats only over the
+hunting period) takes a Newmark step per ``1 / (R fs)``: 100 000-200 000 steps for a 2 s record. In numpy each
+step is ~20 array operations on arrays of a few cases, so the interpreter's overhead, not arithmetic, sets the
+cost (60-240 us per step). The comparison's time-stepped candidates are where its 60 s budget goes
+(``experiments/bench_compare.py``). Here one compiled function marches a whole chunk of steps: the same
+operations case by case (the state update ``s @ B~``, the mesh position predicted to the new step, the
+periodic interpolation of the mesh record, the mesh law solved in closed form or by Newton), with the
+forcing and the reference rotation of the chunk computed beforehand in numpy, as before.
+
+What it covers
+--------------
+The linear mesh law ``F = k delta + c delta' - E`` for every batch, and a nonlinear law (hook 4) when every
+nonlinear case of the batch carries the same effect class and that class offers a compiled scalar form of its
+law, ``scalar_mesh_law`` (:class:`datagen.effects.base.Effect`; :mod:`datagen.effects.backlash` does). An
+effect without one (a user's plugin) runs through the numpy loop, unchanged: adding an effect never needs
+this module. ``datagen.time_stepping.COMPILED = False`` forces the numpy loop (the reference the tests
+compare against).
+
+Equal to the numpy loop to rounding: the products are summed in another order, and Newton stops per case
+rather than when the whole batch has converged (both below ``tol`` relative), so records agree to ~1e-10 of
+their RMS (``tests/test_compiled_stepping.py``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def linear_law(p, delta, delta_dot, k, c, e_force, k_slots, e_slots):
+    """The linear mesh law in the scalar form of ``scalar_mesh_law`` (the batches without a nonlinear law)."""
+    return k * delta + c * delta_dot - e_force, k, c
+
+
+@njit(cache=True)
+def _predict(S, B, bi, c, Y, dg_c, theta_c, x_static, z1, dynamic, i_phi1, n, dt, ppc, nflt, last, nrec, offset):
+    """``Y = s_c @ B~`` (next state, ``d_lin``, ``h``) and the mesh position at the new step of case ``c``:
+    returns ``(d_lin, h, a, b, f)``, the record rows on either side of it and the fraction between them."""
+    m1 = S.shape[1]
+    for q in range(Y.size):
+        acc = 0.0
+        for p in range(m1):
+            acc += S[c, p] * B[bi, p, q]
+        Y[q] = acc
+    phi = S[c, i_phi1] + dt * S[c, n + i_phi1] + 0.5 * dt * dt * S[c, 2 * n + i_phi1]
+    x = z1[c] * (theta_c + dynamic[c] * phi) + (1.0 - dynamic[c]) * x_static[c]
+    pos = (x * ppc[c]) % nflt[c]                            # in [0, n): truncation is the floor
+    a = int(pos)
+    f = pos - a
+    if a > last[c]:
+        a = last[c]
+    b = a + 1
+    if b == nrec[c]:
+        b = 0
+    return Y[m1] + dg_c, Y[m1 + 1], a + offset[c], b + offset[c], f
+
+
+@njit(cache=True)
+def _advance(Y, G_jc, us_c, F, Sn_c, traj_jc):
+    """The next state of one case: ``Y + G - F u`` (and its first 3n components into the trajectory)."""
+    for q in range(Sn_c.size):
+        Sn_c[q] = Y[q] + G_jc[q] - F * us_c[q]
+    for q in range(traj_jc.size):
+        traj_jc[q] = Sn_c[q]
+
+
+@njit(cache=True)
+def _march_linear(S, B, shared, G, dg, us, theta, x_static, z1, dynamic, i_phi1, n, dt,
+                  ppc, nflt, last, nrec, offset, k_tab, e_tab, c_m, sigma, traj, force):
+    """A chunk of steps with the linear law, solved in closed form (no function-typed argument, so numba's
+    on-disk cache keeps it across processes)."""
+    C, m1 = S.shape
+    Y = np.empty(m1 + 2)
+    Sn = np.empty((C, m1))
+    two_dt = 2.0 / dt
+    for j in range(G.shape[0]):
+        for c in range(C):
+            d_lin, h, a, b, f = _predict(S, B, 0 if shared else c, c, Y, dg[j, c], theta[j, c], x_static, z1,
+                                         dynamic, i_phi1, n, dt, ppc, nflt, last, nrec, offset)
+            k = k_tab[a] * (1.0 - f) + k_tab[b] * f
+            e_force = e_tab[a] * (1.0 - f) + e_tab[b] * f
+            kappa = k + two_dt * c_m[c]
+            t1 = c_m[c] * h + e_force
+            delta = (d_lin + sigma[c] * t1) / (1.0 + sigma[c] * kappa)
+            F = kappa * delta - t1
+            _advance(Y, G[j, c], us[c], F, Sn[c], traj[j, c])
+            force[j, c] = F
+        S[:, :] = Sn
+    return 0
+
+
+@njit
+def _march_law(law, S, B, shared, G, dg, us, theta, x_static, z1, dynamic, i_phi1, n, dt,
+               ppc, nflt, last, nrec, offset, k_tab, e_tab, k_slots, e_slots, c_m, sigma,
+               law_row, P, tol, max_iter, traj, force):
+    """A chunk of steps with a nonlinear law ``law`` for the cases whose ``law_row >= 0`` (parameters
+    ``P[law_row]``), solved by Newton per case as :func:`datagen.newmark.solve_mesh_law` does; the other cases in
+    closed form. Takes the law as an argument, so it is compiled in each process (~4 s), not cached."""
+    C, m1 = S.shape
+    n_slots = k_slots.shape[1]
+    Y = np.empty(m1 + 2)
+    Sn = np.empty((C, m1))
+    ks = np.empty(n_slots)
+    es = np.empty(n_slots)
+    two_dt = 2.0 / dt
+    bad = 0
+    for j in range(G.shape[0]):
+        for c in range(C):
+            d_lin, h, a, b, f = _predict(S, B, 0 if shared else c, c, Y, dg[j, c], theta[j, c], x_static, z1,
+                                         dynamic, i_phi1, n, dt, ppc, nflt, last, nrec, offset)
+            g = 1.0 - f
+            k = k_tab[a] * g + k_tab[b] * f
+            e_force = e_tab[a] * g + e_tab[b] * f
+            sig, cm, r = sigma[c], c_m[c], law_row[c]
+            if r < 0:
+                kappa = k + two_dt * cm
+                t1 = cm * h + e_force
+                delta = (d_lin + sig * t1) / (1.0 + sig * kappa)
+                F = kappa * delta - t1
+            else:
+                for s in range(n_slots):
+                    ks[s] = k_slots[a, s] * g + k_slots[b, s] * f
+                    es[s] = e_slots[a, s] * g + e_slots[b, s] * f
+                delta = d_lin
+                done = False
+                F = 0.0
+                for _ in range(max_iter):
+                    F, dF, dFd = law(P[r], delta, two_dt * delta - h, k, cm, e_force, ks, es)
+                    slope = dF + two_dt * dFd
+                    step = (delta + sig * F - d_lin) / (1.0 + sig * slope)
+                    delta -= step
+                    if abs(step) <= tol * (abs(delta) + 1e-9):
+                        F = F - slope * step
+                        done = True
+                        break
+                if not done:
+                    F, dF, dFd = law(P[r], delta, two_dt * delta - h, k, cm, e_force, ks, es)
+                    if abs(delta + sig * F - d_lin) > 1e3 * tol * (abs(delta) + 1e-9):
+                        bad += 1
+            _advance(Y, G[j, c], us[c], F, Sn[c], traj[j, c])
+            force[j, c] = F
+        S[:, :] = Sn
+    return bad
+
+
+@dataclass
+class CompiledMesh:
+    """What the compiled loop needs of the mesh (arrays over the C cases of a batch).
+
+    ``records``: :class:`datagen.mesh_excitation.MeshRecords`; ``law``: a compiled scalar law (or
+    :func:`linear_law`), ``law_row[c]`` the row of ``P`` holding case ``c``'s law parameters, -1 for the linear
+    law; the rest as in :func:`datagen.time_stepping.transient_response`."""
+
+    records: object
+    z1_per_rad: np.ndarray
+    dynamic: np.ndarray
+    x_static: np.ndarray
+    i_phi1: int
+    c_m: np.ndarray
+    law: object
+    law_row: np.ndarray
+    law_params: np.ndarray
+    tol: float = 1e-12
+    max_iter: int = 30
+
+
+def run_general(batch, S0: np.ndarray, n_steps: int, chunk: int, inputs, theta_of_chunk, mesh: CompiledMesh):
+    """:func:`datagen.newmark.run_general` with the per-step work compiled; ``theta_of_chunk()`` gives the
+    reference rotation (L, C) of the chunk ``inputs`` has just prepared. Yields the same
+    ``(i0, traj, force, n_unconverged)``."""
+    n = batch.n
+    m = 3 * n
+    S = np.ascontiguousarray(batch.augment(S0[:, None, :], np.zeros(1))[:, 0])
+    B = np.ascontiguousarray(batch.B[None] if batch.shared else batch.B)
+    us = np.ascontiguousarray(batch.u_state)
+    rec = mesh.records
+    C = S.shape[0]
+    linear = mesh.law is linear_law
+    for i0 in range(0, n_steps, chunk):
+        L = min(chunk, n_steps - i0)
+        G, dg = inputs(i0, L, S)
+        theta = np.ascontiguousarray(theta_of_chunk())
+        traj = np.empty((L, C, m))
+        force = np.empty((L, C))
+        args = (S, B, batch.shared, np.ascontiguousarray(G), np.ascontiguousarray(dg), us, theta,
+                mesh.x_static, mesh.z1_per_rad, mesh.dynamic, mesh.i_phi1, n, float(batch.dt[0]),
+                rec.ppc, rec._n_float, rec._last, rec.n, rec.offset, rec.k, rec.error_force)
+        if linear:
+            bad = _march_linear(*args, mesh.c_m, batch.sigma, traj, force)
+        else:
+            bad = _march_law(mesh.law, *args, rec.k_slots, rec.e_slots, mesh.c_m, batch.sigma, mesh.law_row,
+                             mesh.law_params, mesh.tol, mesh.max_iter, traj, force)
+        yield i0, traj, force, int(bad)
