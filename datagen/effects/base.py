@@ -83,7 +83,10 @@ How to write an effect
    once per case on the decimated output (1-D arrays at ``fs_hz``).
    Hooks 3 and 5 make a case non-stationary, hook 4 nonlinear: such cases are
    time-stepped through a start-up transient instead of solved for their
-   periodic steady state.
+   periodic steady state. Optionally, hook 4's law for one case compiled
+   with numba (class attribute ``scalar_mesh_law``) lets that time loop run
+   compiled (:mod:`datagen.compiled_stepping`); without it the loop runs in
+   numpy, with the same result.
 5. Randomness only in hook 7 through the ``rng`` handed in (derived from the
    case seed and the effect's position): same seed, same bytes.
 6. The parameters the model-vs-measurement comparison fits (its attribution
