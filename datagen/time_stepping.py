@@ -14,6 +14,8 @@ follows hook 5, the motor feed-forward stays at the nominal torque (the speed co
 the rest). The mesh stiffness is read at the actual pinion angle ``theta_ref + phi_1``, with
 ``phi_1`` predicted to the new step (``phi + dt phi' + dt^2/2 phi''``). A nonlinear mesh law is
 solved per step by Newton on the scalar mesh deflection (:func:`datagen.newmark.solve_mesh_law`).
+The loop over the steps runs compiled (:mod:`datagen.compiled_stepping`) unless a mesh law of the batch has
+no compiled form; the numpy loop (:func:`datagen.newmark.run_general`) is kept as its reference.
 """
 from __future__ import annotations
 
@@ -146,10 +148,10 @@ def transient_response(cases, R: int, n_discard: int) -> list[Response]:
 
         mesh = compiled_stepping.CompiledMesh(records, z1_per_rad, dynamic, np.asarray(x_static, float), i_phi1,
                                               np.asarray(c_m, float), *law)
-        steps = compiled_stepping.run_general(batch, S0, n_total, CHUNK, inputs, lambda: theta_steps["theta"], mesh)
+        chunks = compiled_stepping.run_general(batch, S0, n_total, CHUNK, inputs, lambda: theta_steps["theta"], mesh)
     else:
-        steps = newmark.run_general(batch, S0, n_total, CHUNK, inputs, mesh_force)
-    for i0, traj, force, bad in steps:
+        chunks = newmark.run_general(batch, S0, n_total, CHUNK, inputs, mesh_force)
+    for i0, traj, force, bad in chunks:
         bad_total += bad
         L = traj.shape[0]
         steps = i0 + 1 + np.arange(L)                     # step index of each sample
