@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from features.tsa import AngleTrack, angular_resample
+from features.tsa import AngleTrack, TimeInterpolant
 from gearpit.errors import require
 
 #: half width (bins) of the neighbourhood whose low quantile is a line's floor
@@ -71,9 +71,10 @@ class AngleRecords:
 def angle_records(x: np.ndarray, fs_hz: float, track: AngleTrack, plan) -> AngleRecords:
     """Resample ``x`` (pinion angle ``track``) for the plan; refuses records shorter than the plan."""
     ratio = plan.z_pinion / plan.z_wheel
-    rp = angular_resample(x, fs_hz, track, samples_per_rev=plan.samples_per_rev, oversample=2)
+    rec = TimeInterpolant(x, fs_hz, oversample=2)          # one upsampling and spline for both shafts
+    rp = rec.resample(track, samples_per_rev=plan.samples_per_rev)
     wt = AngleTrack(track.time_s, track.angle_rad * ratio)
-    rw = angular_resample(x, fs_hz, wt, samples_per_rev=plan.samples_per_rev_wheel, oversample=2)
+    rw = rec.resample(wt, samples_per_rev=plan.samples_per_rev_wheel)
     require(rp.shape[0] >= plan.n_revs and rw.shape[0] >= plan.n_revs_wheel, "record",
             f"{rp.shape[0]} pinion / {rw.shape[0]} wheel revolutions",
             f">= {plan.n_revs} / {plan.n_revs_wheel} (as many as the measurement)")

@@ -180,29 +180,41 @@ def angular_resample(x: np.ndarray, fs_hz: float, track: AngleTrack, *, samples_
     -------
     ndarray, shape (n_revolutions, samples_per_rev)
     """
-    a = np.asarray(x, dtype=float)
-    require(a.ndim == 1 and a.size >= 2, "x", a.shape, "a 1-D array of >= 2 samples")
-    require_positive("fs_hz", fs_hz)
-    require(isinstance(samples_per_rev, (int, np.integer)) and samples_per_rev >= 4, "samples_per_rev",
-            samples_per_rev, "an integer >= 4")
-    require(isinstance(oversample, (int, np.integer)) and oversample >= 1, "oversample", oversample, "an integer >= 1")
-    duration = (a.size - 1) / fs_hz
-    require(track.time_s[0] >= -1e-12 and track.time_s[-1] <= duration + 1e-9, "track", 
-            (float(track.time_s[0]), float(track.time_s[-1])), f"times within the record [0, {duration}] s")
-    # revolution r spans target angles 2 pi (r + j/N), j < N: the last one must be inside the track
-    n_rev = int(np.floor((track.angle_rad[-1] - track.angle_rad[0]) / TWO_PI + 1.0 / samples_per_rev + 1e-9))
-    require(n_rev >= 1, "track", f"{n_rev} revolutions", ">= 1 whole revolution in the record")
-    target = track.angle_rad[0] + TWO_PI * np.arange(n_rev * samples_per_rev) / samples_per_rev
-    times = PchipInterpolator(track.angle_rad, track.time_s)(target)
-    if oversample > 1:
-        # Kaiser beta 8.6 (~80 dB stop band, ~1e-4 pass-band ripple), 20 input samples each side
-        taps = firwin(2 * 20 * oversample + 1, 1.0 / oversample, window=("kaiser", 8.6))
-        up = resample_poly(a, oversample, 1, window=taps)
-        t_up = np.arange(up.size) / (fs_hz * oversample)
-        values = CubicSpline(t_up, up)(times)
-    else:
-        values = CubicSpline(np.arange(a.size) / fs_hz, a)(times)
-    return values.reshape(n_rev, samples_per_rev)
+    return TimeInterpolant(x, fs_hz, oversample=oversample).resample(track, samples_per_rev=samples_per_rev)
+
+
+class TimeInterpolant:
+    """A record made continuous in time (upsampled by ``oversample``, then a cubic spline), to be resampled on
+    several angle tracks (:meth:`resample`: the pinion's and the wheel's) at the cost of one upsampling and one
+    spline; each resampling equals :func:`angular_resample`'s exactly (it is the same computation)."""
+
+    def __init__(self, x: np.ndarray, fs_hz: float, *, oversample: int = 4):
+        a = np.asarray(x, dtype=float)
+        require(a.ndim == 1 and a.size >= 2, "x", a.shape, "a 1-D array of >= 2 samples")
+        require_positive("fs_hz", fs_hz)
+        require(isinstance(oversample, (int, np.integer)) and oversample >= 1, "oversample", oversample,
+                "an integer >= 1")
+        self.duration_s = (a.size - 1) / fs_hz
+        if oversample > 1:
+            # Kaiser beta 8.6 (~80 dB stop band, ~1e-4 pass-band ripple), 20 input samples each side
+            taps = firwin(2 * 20 * oversample + 1, 1.0 / oversample, window=("kaiser", 8.6))
+            up = resample_poly(a, oversample, 1, window=taps)
+            self.spline = CubicSpline(np.arange(up.size) / (fs_hz * oversample), up)
+        else:
+            self.spline = CubicSpline(np.arange(a.size) / fs_hz, a)
+
+    def resample(self, track: AngleTrack, *, samples_per_rev: int) -> np.ndarray:
+        """The record at equal steps of ``track``'s angle, whole revolutions: ``(n_revolutions, samples_per_rev)``."""
+        require(isinstance(samples_per_rev, (int, np.integer)) and samples_per_rev >= 4, "samples_per_rev",
+                samples_per_rev, "an integer >= 4")
+        require(track.time_s[0] >= -1e-12 and track.time_s[-1] <= self.duration_s + 1e-9, "track",
+                (float(track.time_s[0]), float(track.time_s[-1])), f"times within the record [0, {self.duration_s}] s")
+        # revolution r spans target angles 2 pi (r + j/N), j < N: the last one must be inside the track
+        n_rev = int(np.floor((track.angle_rad[-1] - track.angle_rad[0]) / TWO_PI + 1.0 / samples_per_rev + 1e-9))
+        require(n_rev >= 1, "track", f"{n_rev} revolutions", ">= 1 whole revolution in the record")
+        target = track.angle_rad[0] + TWO_PI * np.arange(n_rev * samples_per_rev) / samples_per_rev
+        times = PchipInterpolator(track.angle_rad, track.time_s)(target)
+        return self.spline(times).reshape(n_rev, samples_per_rev)
 
 
 @dataclass(frozen=True)
