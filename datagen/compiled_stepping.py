@@ -15,10 +15,12 @@ What it covers
 --------------
 The linear mesh law ``F = k delta + c delta' - E`` for every batch, and a nonlinear law (hook 4) when every
 nonlinear case of the batch carries the same effect class and that class offers a compiled scalar form of its
-law, ``scalar_mesh_law`` (:class:`datagen.effects.base.Effect`; :mod:`datagen.effects.backlash` does). An
-effect without one (a user's plugin) runs through the numpy loop, unchanged: adding an effect never needs
-this module. ``datagen.time_stepping.COMPILED = False`` forces the numpy loop (the reference the tests
-compare against).
+law, ``scalar_mesh_law`` (:class:`datagen.effects.base.Effect`), made with :func:`scalar_law` (a numba
+``cfunc`` of :data:`SCALAR_LAW_SIGNATURE`; :mod:`datagen.effects.backlash` has one). The loop takes the law as a
+function pointer, so it is compiled once and kept in numba's on-disk cache (a loop specialised on each law would
+be compiled again in every process, ~4 s). An effect without one (a user's plugin) runs through the numpy loop,
+unchanged: adding an effect never needs this module. ``datagen.time_stepping.COMPILED = False`` forces the
+numpy loop (the reference the tests compare against).
 
 Equal to the numpy loop to rounding: the products are summed in another order, and Newton stops per case
 rather than when the whole batch has converged (both below ``tol`` relative), so records agree to ~1e-10 of
@@ -29,7 +31,27 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
+from numba import cfunc, njit, types
+
+#: the signature of an effect's compiled scalar mesh law (``scalar_mesh_law``, hook 4):
+#: ``(p, delta_m, delta_dot_m_s, k_n_per_m, c_n_s_per_m, error_force_n, k_slots_n_per_m, e_slots_m) -> (F, dF/d delta,
+#: dF/d delta_dot)``, ``p`` the case's parameters in field order, the slots 1-D
+SCALAR_LAW_SIGNATURE = types.UniTuple(types.float64, 3)(
+    types.float64[::1], types.float64, types.float64, types.float64, types.float64, types.float64,
+    types.float64[::1], types.float64[::1])
+
+
+def scalar_law(fn):
+    """Decorator of an effect's ``scalar_mesh_law``: compiled to a C callback of :data:`SCALAR_LAW_SIGNATURE`
+    (numba ``cfunc``, cached on disk). The loop takes it as a function pointer, so one compiled loop serves
+    every law and stays in numba's cache across processes."""
+    return cfunc(SCALAR_LAW_SIGNATURE, cache=True)(fn)
+
+
+@njit(cache=True)
+def evaluate_law(law, p, delta, delta_dot, k, c, e_force, k_slots, e_slots):
+    """``law(...)`` called from Python (a ``cfunc`` is not callable there): for tests and checks."""
+    return law(p, delta, delta_dot, k, c, e_force, k_slots, e_slots)
 
 
 @njit(cache=True)
@@ -73,8 +95,7 @@ def _advance(Y, G_jc, us_c, F, Sn_c, traj_jc):
 @njit(cache=True)
 def _march_linear(S, B, shared, G, dg, us, theta, x_static, z1, dynamic, i_phi1, n, dt,
                   ppc, nflt, last, nrec, offset, k_tab, e_tab, c_m, sigma, traj, force):
-    """A chunk of steps with the linear law, solved in closed form (no function-typed argument, so numba's
-    on-disk cache keeps it across processes)."""
+    """A chunk of steps with the linear law, solved in closed form."""
     C, m1 = S.shape
     Y = np.empty(m1 + 2)
     Sn = np.empty((C, m1))
@@ -95,13 +116,13 @@ def _march_linear(S, B, shared, G, dg, us, theta, x_static, z1, dynamic, i_phi1,
     return 0
 
 
-@njit
+@njit(cache=True)
 def _march_law(law, S, B, shared, G, dg, us, theta, x_static, z1, dynamic, i_phi1, n, dt,
                ppc, nflt, last, nrec, offset, k_tab, e_tab, k_slots, e_slots, c_m, sigma,
                law_row, P, tol, max_iter, traj, force):
     """A chunk of steps with a nonlinear law ``law`` for the cases whose ``law_row >= 0`` (parameters
     ``P[law_row]``), solved by Newton per case as :func:`datagen.newmark.solve_mesh_law` does; the other cases in
-    closed form. Takes the law as an argument, so it is compiled in each process (~4 s), not cached."""
+    closed form. ``law`` is a :func:`scalar_law` (a function pointer), so this loop is compiled once and cached."""
     C, m1 = S.shape
     n_slots = k_slots.shape[1]
     Y = np.empty(m1 + 2)

@@ -84,9 +84,12 @@ def test_the_scalar_backlash_law_is_the_batch_law():
     ddot = rng.normal(0, 0.05, n)
     mesh = MeshState(ks.sum(1), np.full(n, 700.0), (ks * es).sum(1), ks, es)
     F, dF, dFd = Backlash.mesh_force_batch({"backlash_m": b}, delta, ddot, mesh)
+    from datagen.compiled_stepping import evaluate_law
+
     law = Backlash.scalar_mesh_law
-    got = np.array([law(np.array([b[i]]), delta[i], ddot[i], mesh.k_n_per_m[i], 700.0, mesh.error_force_n[i],
-                        ks[i], es[i]) for i in range(n)])
+    got = np.array([evaluate_law(law, np.array([b[i]]), delta[i], ddot[i], mesh.k_n_per_m[i], 700.0,
+                                 mesh.error_force_n[i], np.ascontiguousarray(ks[i]), np.ascontiguousarray(es[i]))
+                    for i in range(n)])
     np.testing.assert_allclose(got[:, 0], F, rtol=1e-12, atol=1e-9)
     np.testing.assert_allclose(got[:, 1], dF, rtol=1e-12)
     np.testing.assert_allclose(got[:, 2], dFd, rtol=1e-12)

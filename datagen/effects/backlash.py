@@ -16,12 +16,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
 
+from datagen.compiled_stepping import scalar_law
 from datagen.effects.base import Effect, Fit, register
 
 
-@njit(cache=True)
+@scalar_law
 def _scalar_law(p, delta, delta_dot, k, c, e_force, k_slots, e_slots):
     """:meth:`Backlash.mesh_force_batch` for one case (``p[0]``: the backlash), compiled for the time-stepping
     loop (:mod:`datagen.compiled_stepping`)."""
@@ -57,7 +57,7 @@ class Backlash(Effect):
     signature = "at light load/high speed: contact loss -> impacts, broadband rattle, sub/superharmonics of fm"
     fit_parameters = (Fit("backlash_m", scale="log"),)
     backlash_m: float = field(default=100e-6, metadata={"unit": "m", "bounds": (0.0, 1e-3)})
-    scalar_mesh_law = staticmethod(_scalar_law)
+    scalar_mesh_law = _scalar_law
 
     @classmethod
     def mesh_force_batch(cls, params, delta_m, delta_dot_m_s, mesh):

@@ -316,11 +316,11 @@ class Effect:
         return np.zeros((len(t_s), len(ctx.dof_names)))
 
     # ------------------------------------------------------------------ 4. nonlinear mesh law
-    #: optional: the law of :meth:`mesh_force_batch` for one case, compiled with numba (``@njit``), signature
-    #: ``(p, delta_m, delta_dot_m_s, k_n_per_m, c_n_s_per_m, error_force_n, k_slots_n_per_m, e_slots_m) ->
-    #: (F, dF/d delta, dF/d delta_dot)`` with ``p`` the case's parameters in field order (floats) and the slots
-    #: 1-D; the time-stepping loop then runs compiled (:mod:`datagen.compiled_stepping`). Without it the law
-    #: runs through the numpy loop: nothing else changes.
+    #: optional: the law of :meth:`mesh_force_batch` for one case, compiled by the decorator
+    #: :func:`datagen.compiled_stepping.scalar_law`, signature ``(p, delta_m, delta_dot_m_s, k_n_per_m,
+    #: c_n_s_per_m, error_force_n, k_slots_n_per_m, e_slots_m) -> (F, dF/d delta, dF/d delta_dot)`` with ``p`` the
+    #: case's parameters in field order (floats) and the slots 1-D; the time-stepping loop then runs compiled
+    #: (:mod:`datagen.compiled_stepping`). Without it the law runs through the numpy loop: nothing else changes.
     scalar_mesh_law = None
 
     @classmethod
