@@ -33,6 +33,7 @@ import numpy as np
 
 from compare.candidates import (Attribution, AttributionSettings, CandidateResult, choose_claim, passes_claim_rule,
                                 rivals_of, unexplained_of)
+from compare.chaos import chaotic_realisations, profile_ladder
 from compare.comparison import NOISE_DRAWS, Reference, evaluate, simulate_model
 from compare.error import effective_count
 from compare.fitspace import CHAIN_EFFECTS, fit_space
@@ -185,10 +186,12 @@ def _confirm_on_record(results: list, ref: Reference, model, settings: Attributi
     :data:`RUNNERS_UP` distinct window trials: the error surface of a short window is ragged, measured for a
     50 um backlash: 2.33-2.86 dB among fits from 60 to 130 um, and its minimum need not be the whole record's);
     the one with the lowest whole-record error is kept, its errors become the candidate's (the 1-sigma stays
-    the window's), and one that then fails the claim rule gets the status "not confirmed on the whole record". Returns the number of simulations run (0 when no
+    the window's), and one that then fails the claim rule gets the status "not confirmed on the whole record". A
+    nonlinear candidate (a mesh-force law: its record may be chaotic) is then profiled on whole-record ladders
+    (:func:`_profile_nonlinear`, :mod:`compare.chaos`). Returns the number of simulations run (0 when no
     candidate needed it).
     """
-    from datagen.effects import EffectSpec
+    from datagen.effects import EffectSpec, get
 
     whole = window_label(ref)
     todo = [c for c in results if c.window != whole and c.status == "fitted" and c.reduction >= settings.claim_reduction]
@@ -206,13 +209,16 @@ def _confirm_on_record(results: list, ref: Reference, model, settings: Attributi
             c.status = "not confirmed on the whole record (simulation failed)"
         return len(extra)
     base = evaluate(ref, ys[0], ref.fs_hz, seed=settings.seed, noise_draws=NOISE_DRAWS).residuals
-    k = 1
+    k, n_sims = 1, len(extra)
     for c, ps in zip(todo, options):
         evs = [evaluate(ref, y, ref.fs_hz, seed=settings.seed).residuals for y in ys[k:k + len(ps)]]
         k += len(ps)
         i = int(np.argmin([ev.total_db for ev in evs]))     # the raw error, what the fits minimise
         ev = evs[i]
         c.params = dict(ps[i])
+        if get(c.effect)().is_nonlinear and fit_space(get(c.effect)).n:
+            ev, n = _profile_nonlinear(c, ev, ref, model, settings, solver)
+            n_sims += n
         c.noise_view_db = dict(base.noise_view_db or {})
         c.baseline_view_error_db = base.excess_view_db
         c.baseline_error_db = base.excess_total_db
@@ -222,7 +228,44 @@ def _confirm_on_record(results: list, ref: Reference, model, settings: Attributi
         c.explains = explained_keys(ref, ev.residual_db, disagreements)
         if not passes_claim_rule(c, settings):
             c.status = "not confirmed on the whole record"
-    return len(extra)
+    return n_sims
+
+
+def _profile_nonlinear(c: CandidateResult, ev, ref: Reference, model, settings: AttributionSettings, solver: dict):
+    """Profile candidate ``c``, a nonlinear effect fitted on the whole record (residuals ``ev``), on the ladders of
+    :func:`compare.chaos.profile_ladder` (whole record, several realisations per value). When the record is
+    chaotic at any ladder value, the fit is the ladder's: the values of lowest mean error, ``interval`` and
+    ``sigma`` what the realisation scatter allows, ``realisation_scatter_db`` that scatter. When it is regular
+    everywhere, the fit stays, and a parameter whose ladder shows a plateau reaching a bound (the record no
+    longer depends on it: backlash the back flanks never reach) gets that open interval and an infinite sigma.
+    Returns the residuals of the kept fit (for a ladder fit the mean views of its realisations, as
+    :func:`compare.comparison.compare` reads the model with the effect added) and the number of simulations run."""
+    from datagen.effects import EffectSpec, get
+
+    def errors(trials):
+        ex = [(EffectSpec.from_dict({"name": c.effect, **p}).build(),) for p in trials]
+        ys = simulate_model(ref, model, extra_effects_list=ex, seed=settings.seed,
+                            duration_s=ref.model_duration_s(), solver=solver)
+        return [evaluate(ref, y, ref.fs_hz, seed=settings.seed).residuals.total_db
+                if y is not None and np.all(np.isfinite(y)) else math.inf for y in ys]
+
+    profiles = profile_ladder(fit_space(get(c.effect)), c.params, errors)
+    n = sum(p.errors_db.size for p in profiles)
+    if not any(p.chaotic.any() for p in profiles):
+        for p in profiles:
+            iv = p.interval()
+            if None in iv:
+                c.interval[p.parameter], c.sigma[p.parameter] = iv, math.inf
+        return ev, n
+    for p in profiles:
+        c.params[p.parameter] = float(p.values[p.best])
+        c.interval[p.parameter] = p.interval()
+        c.sigma[p.parameter] = p.sigma()
+    c.realisation_scatter_db = max(p.scatter_db for p in profiles)
+    # the chosen fit as a comparison reads a chaotic model: the mean views of its realisations
+    y, others = chaotic_realisations(ref, model, seed=settings.seed, solver=solver,
+                                     extra_effects=(EffectSpec.from_dict({"name": c.effect, **c.params}).build(),))
+    return evaluate(ref, y, ref.fs_hz, seed=settings.seed, ensemble=others).residuals, n + 1 + len(others)
 
 
 def _refine_nuisances(results: list, ref: Reference, model, calibration, settings: AttributionSettings,

@@ -80,6 +80,10 @@ class CandidateResult:
     baseline_view_error_db: dict = field(default_factory=dict)
     #: parameters of the next best distinct trials of a window fit, measured on the whole record too
     runners_up: list = field(default_factory=list, repr=False)
+    #: a chaotic record's fit (compare.chaos): per parameter the (low, high) values consistent with the
+    #: measurement, None where that side reaches the bound; the realisation scatter of its error (dB)
+    interval: dict = field(default_factory=dict)
+    realisation_scatter_db: float | None = None
 
     @property
     def worst_view_rise_db(self) -> float:
@@ -111,7 +115,9 @@ class CandidateResult:
                 "raw_baseline_error_db": self.raw_baseline_error_db,
                 "noise_error_db": combine(self.noise_view_db) if self.noise_view_db else 0.0,
                 "baseline_view_error_db": self.baseline_view_error_db,
-                "worst_view_rise_db": self.worst_view_rise_db}
+                "worst_view_rise_db": self.worst_view_rise_db,
+                "interval": {k: list(v) for k, v in self.interval.items()},
+                "realisation_scatter_db": self.realisation_scatter_db}
 
 
 @dataclass

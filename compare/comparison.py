@@ -116,11 +116,15 @@ NOISE_DRAWS = 2
 
 
 def evaluate(ref: Reference, y: np.ndarray, fs_hz: float, *, seed: int = 0, keep_curves: bool = False,
-             keep_signal: bool = False, noise_draws: int = 0, noise_view_db: dict | None = None) -> Evaluation:
+             keep_signal: bool = False, noise_draws: int = 0, noise_view_db: dict | None = None,
+             ensemble=()) -> Evaluation:
     """Compare a model record ``y`` (at the refined speed, from t = 0) with the reference (module docstring).
 
     ``noise_draws`` > 0 measures the noise error (step 5) with that many further draws; ``noise_view_db``
-    instead attaches one measured before (e.g. the baseline's, for the candidates of an attribution)."""
+    instead attaches one measured before (e.g. the baseline's, for the candidates of an attribution).
+    ``ensemble``: further realisations of a chaotic model (:mod:`compare.chaos`); each gets the same noise
+    level (its own draw) and the model's views are their mean level and floor in dB, the expectation a chaotic
+    model predicts, instead of one draw of it (curves, signal and noise error stay ``y``'s)."""
     require(abs(fs_hz - ref.fs_hz) <= 1e-6 * ref.fs_hz, "model fs_hz", fs_hz, f"the measurement's {ref.fs_hz} Hz")
     y = np.asarray(y, float)
     plan = ref.plan
@@ -137,6 +141,11 @@ def evaluate(ref: Reference, y: np.ndarray, fs_hz: float, *, seed: int = 0, keep
         rng = np.random.default_rng(seed)
         y = y + np.sqrt(s2) * rng.standard_normal(y.size)
     v = analyse(y, fs_hz, track, plan, keep_curves=keep_curves)
+    if len(ensemble):
+        members = [v] + [analyse(np.asarray(e, float) + (np.sqrt(s2) * np.random.default_rng([seed, k]).standard_normal(
+            len(e)) if s2 > 0 else 0.0), fs_hz, track, plan) for k, e in enumerate(ensemble, start=1)]
+        v = SignalViews(levels=np.mean([m.levels for m in members], axis=0),
+                        floors=np.mean([m.floors for m in members], axis=0), curves=v.curves)
     q = ref.reliability
     res = residuals(ref.views, v, plan, q=q)
     if noise_view_db is None and noise_draws > 0:
@@ -226,9 +235,12 @@ def compare(measurement: Measurement, model, *, seed: int = 0, reference: Refere
     the one that made ``model``)."""
     from compare.disagreements import rank_disagreements
 
+    from compare.chaos import chaotic_realisations
+
     ref = reference if reference is not None else prepare_reference(measurement)
-    (y,) = simulate_model(ref, model, seed=seed)
-    ev = evaluate(ref, y, measurement.fs_hz, seed=seed, keep_curves=True, keep_signal=True, noise_draws=NOISE_DRAWS)
+    y, others = chaotic_realisations(ref, model, seed=seed)
+    ev = evaluate(ref, y, measurement.fs_hz, seed=seed, keep_curves=True, keep_signal=True, noise_draws=NOISE_DRAWS,
+                  ensemble=others)
     dis = rank_disagreements(ref, ev)
     return Comparison(reference=ref, model=model, evaluation=ev, disagreements=dis, model_signal=ev.x,
                       calibration=calibration)

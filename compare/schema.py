@@ -111,7 +111,21 @@ SCHEMA = {
                                                                                     "fit (calibrated runs)"},
                                                         "raw_error_db": _NUM,
                                                         "raw_baseline_error_db": _NUM,
-                                                        "noise_error_db": {"type": "number"}}}},
+                                                        "noise_error_db": {"type": "number"},
+                                                        "interval": {"type": "object",
+                                                                     "additionalProperties": {
+                                                                         "type": "array", "items": _NUM,
+                                                                         "minItems": 2, "maxItems": 2},
+                                                                     "description": "a chaotic record's fit "
+                                                                     "(compare.chaos): per parameter [low, high] "
+                                                                     "between the nearest values the measurement "
+                                                                     "rejects, null: not bounded on that side; "
+                                                                     "empty for a regular record"},
+                                                        "realisation_scatter_db": {
+                                                            "type": ["number", "null"],
+                                                            "description": "1-sigma of the error over "
+                                                                           "realisations of a chaotic record; "
+                                                                           "null: the record is regular"}}}},
                 "unexplained": {"type": "array", "items": {"type": "object", "required": ["key", "text"]}},
                 "claimed": {"type": "array", "items": {"type": "string"}},
                 "rivals": {"type": "array", "items": {"type": "string"},

@@ -88,8 +88,15 @@ HIDDEN_EXAMPLES = {
     # floor (baseline 2.3-3.0 dB) and the rig's own model keeps at most 0.29
     "hertz_nonlinear": HiddenExample({"name": "hertz_nonlinear"}, torque_nm=5.0, snr_db=40.0),
     # a healthy pair never loses contact (the mesh force stays above ~70 % of its mean): backlash needs an
-    # excitation; here both rig and model carry a profile error, at a light load
-    "backlash": HiddenExample({"name": "backlash", "backlash_m": 50e-6}, torque_nm=2.0,
+    # excitation; here both rig and model carry a profile error, at a light load. The teeth lose contact every
+    # mesh cycle and the record is chaotic (compare.chaos), so every check is one realisation's. The amount shows
+    # only while the back flanks are struck often: at 50 um they are struck so rarely that every backlash from
+    # 20-35 um up fits as well (above ~140 um never reached: the record does not change at all), so 50 um is
+    # checked by its interval (tests/test_compare_attribution.py, BACKLASH_UNBOUNDED); at 20 um the amount is
+    # identified (fitted 19.8-22.9 um over five realisations) but adding it halved the error on two of five only
+    # (0.23-0.55: the nuisances' floor, the true backlash at the model's drive train keeps 0.18-0.49); at 30 um
+    # all three checks passed on five of six realisations (fitted 22.4-32.5 um, ratios 0.38-0.48 and one 0.502)
+    "backlash": HiddenExample({"name": "backlash", "backlash_m": 30e-6}, torque_nm=2.0,
                               check=("backlash_m", "ratio", 2.0), known=({"name": "profile_error", "grade": 9.0},)),
     "speed_fluctuation": HiddenExample({"name": "speed_fluctuation", "amplitude_fraction": 0.01, "frequency_hz": 23.0},
                                        check=("frequency_hz", "ratio", 1.05)),
@@ -135,10 +142,10 @@ def rig_measurement(effects=(), *, speed_rpm: float = 1000.0, torque_nm: float =
     return measurement_from_arrays(channels, sc, source="simulated rig")
 
 
-def hidden_effect_measurement(name: str, *, seed: int = 3, **kw):
-    """The rig of :data:`HIDDEN_EXAMPLES` ``[name]`` (its known effects plus the hidden one); returns
-    (measurement, example); ``example.model()`` is the comparison model to start from."""
-    ex = HIDDEN_EXAMPLES[name]
+def hidden_effect_measurement(name: str, *, seed: int = 3, example: HiddenExample | None = None, **kw):
+    """The rig of :data:`HIDDEN_EXAMPLES` ``[name]`` (or of ``example``: its known effects plus the hidden one);
+    returns (measurement, example); ``example.model()`` is the comparison model to start from."""
+    ex = example or HIDDEN_EXAMPLES[name]
     args = {"speed_rpm": ex.speed_rpm, "torque_nm": ex.torque_nm, "snr_db": ex.snr_db, **kw}
     m = rig_measurement(ex.known + (ex.effect,), seed=seed, **args)
     return m, ex
@@ -158,7 +165,7 @@ def check_fit(example: HiddenExample, params: dict) -> tuple[bool, str]:
 
 
 def run_hidden_case(name: str, *, calibrate: bool | str | None = None, candidates=None, seed: int = 3,
-                    rig: dict | None = None):
+                    rig: dict | None = None, example: HiddenExample | None = None):
     """The user's loop on the rig of :data:`HIDDEN_EXAMPLES` ``[name]``: compare the example's model (nuisances
     calibrated as ``calibrate`` says: True, False or "auto"; None: as the model says, default "auto",
     :mod:`compare.escalation`), attribute over ``candidates``
@@ -166,7 +173,8 @@ def run_hidden_case(name: str, *, calibrate: bool | str | None = None, candidate
     runs, the nuisances it was fitted with, as ``gearpit compare --add`` does) and compare again. ``seed``: the
     rig's noise draw (the tests use the default; other seeds check that a result is not one draw's luck).
     ``rig``: keyword arguments of :func:`rig_measurement` that replace the example's (another pair, speed,
-    nuisance set, gain or noise: ``experiments/generalisation_check.py``).
+    nuisance set, gain or noise: ``experiments/generalisation_check.py``). ``example``: a
+    :class:`HiddenExample` that replaces ``HIDDEN_EXAMPLES[name]`` (the same effect at another value).
 
     Returns ``(example, first comparison, attribution, second comparison)``.
     """
@@ -174,7 +182,7 @@ def run_hidden_case(name: str, *, calibrate: bool | str | None = None, candidate
     from compare.comparison import prepare_reference
     from compare.escalation import compare_and_attribute
 
-    m, ex = hidden_effect_measurement(name, seed=seed, **(rig or {}))
+    m, ex = hidden_effect_measurement(name, seed=seed, example=example, **(rig or {}))
     ref = prepare_reference(m)
     model = ex.model()
     staged = compare_and_attribute(m, model, reference=ref, calibrate=calibrate, candidates=candidates)

@@ -25,6 +25,11 @@ class InputError(GearpitError):
         self.allowed = allowed
         super().__init__(f"{field}: got {value!r}; allowed: {allowed}")
 
+    def __reduce__(self):
+        """Pickle by the three fields, so that the error crosses a process boundary (a worker of
+        :func:`compare.attribution.attribute`) as itself rather than as a failure to unpickle it."""
+        return type(self), (self.field, self.value, self.allowed)
+
 
 class DesignError(GearpitError):
     """A gear pair that cannot be built or cannot mesh (undercut, interference, ...)."""

@@ -92,16 +92,6 @@ def test_disturbance_outside_the_registry_is_unexplained(disturbance):
 #: mesh (hook 2c).
 NUISANCE_LIMITED: dict = {}
 
-#: effects whose rig record is chaotic, so that its fitted value depends on the realisation (the claim and the halving
-#: do not): the backlash example rattles (2 N m, contact loss every mesh cycle); a 1e-13 relative change of its
-#: backlash changes the record by O(1) in the numpy loop and in the compiled one alike. Over four such
-#: realisations (the example's backlash x (1 + k 1e-13), k = 0..3, 2026-11-26) it was claimed first every time and
-#: the error halved every time (5.13 -> 2.12, 4.85 -> 2.20, 5.02 -> 2.64, 4.61 -> 1.79 dB), but the backlash was fitted
-#: at 178, 93, 81 and 178 um for 50 um: within the factor-2 tolerance on two. For these the fit check is reported
-#: as an expected failure when it misses; the claim and the halving stay strict.
-CHAOTIC_FIT = {"backlash": "the rattle regime is chaotic: the fitted backlash is 81-178 um for 50 um over four "
-                           "realisations of the chaos (within a factor 2 on two)"}
-
 #: pairs of effects whose signatures in these views coincide (name -> its twin). Source: the simulator's truth and
 #: compare.candidates.rivals_of. A speed fluctuation at the motor and a torque fluctuation at the load at the same
 #: frequency both excite the drive train's torsion, and the strongest mesh harmonic carries the same amplitude-to-
@@ -151,9 +141,30 @@ def test_hidden_effect_is_claimed_halves_the_error_and_is_fitted(name):
     assert c1.error_db["total"] <= 0.5 * c0.error_db["total"], (c1.error_db, c0.error_db)
     own = next(c for c in a.candidates if c.effect == name)
     ok, text = check_fit(ex, own.params)
-    if not ok and name in CHAOTIC_FIT:
-        pytest.xfail(f"{CHAOTIC_FIT[name]}; here {text}")
     assert ok, text
+
+
+#: the backlash example's chaotic regime where the amount is not identified (compare.synthetic.HIDDEN_EXAMPLES says
+#: why): 50 um at the example's operating point, where the back flanks are struck so rarely that every backlash
+#: from 20-35 um up fits as well. Measured 2026-11-27 over five realisations of the rig (50 um x (1 + k 1e-13)):
+#: fitted 75, 174, 70, 126 and 75 um (within the factor 2 on three), intervals [19, 150], [22, -], [35, -],
+#: [22, -] and [19, 150] um ('-': no bound), error ratios 0.40-0.49
+BACKLASH_UNBOUNDED = 50e-6
+
+
+@pytest.mark.slow
+def test_backlash_that_is_rarely_closed_gets_an_interval_holding_the_truth():
+    """compare.chaos: at 50 um the rattle record is chaotic and its amount poorly bounded; the tool must say so
+    rather than report a sharp fit. Backlash is claimed first, its record is flagged chaotic (a realisation
+    scatter > 0), and its reported interval contains the truth (an open side counts as unbounded)."""
+    ex = HIDDEN_EXAMPLES["backlash"]
+    ex, c0, a, c1 = run_hidden_case("backlash", seed=3,
+                                    example=dataclasses.replace(ex, effect={**ex.effect, "backlash_m": BACKLASH_UNBOUNDED}))
+    top = a.candidates[0]
+    assert top.effect == "backlash" and top.claimed, [(x.effect, round(x.reduction, 3)) for x in a.candidates[:4]]
+    assert top.realisation_scatter_db and top.realisation_scatter_db > 0
+    lo, hi = top.interval["backlash_m"]
+    assert (lo is None or lo <= BACKLASH_UNBOUNDED) and (hi is None or hi >= BACKLASH_UNBOUNDED), (lo, hi)
 
 
 @pytest.mark.slow

@@ -1,0 +1,182 @@
+"""Fitting an effect whose simulated record is chaotic: detect it, and give its parameters an interval that holds.
+
+A nonlinear effect (backlash in its rattle regime: contact loss and back-flank impacts every few mesh cycles)
+can make the drive train's response chaotic: a relative change of 1e-12 in a parameter changes the 2 s record
+by O(1) (measured on spur-gds at 2 N m with 50 um of backlash, in the numpy and the compiled time loop alike).
+Its error against a measurement is then one draw from a spread of errors: a single simulation per trial makes
+the error surface ragged, its minimum a matter of luck, and the curvature-based 1-sigma of
+:mod:`compare.fitting` meaningless (it treats that raggedness as signal). Worse, the amount can be unidentified
+altogether: above the largest excursion of the dynamic transmission error the back flanks never meet and the
+record no longer depends on the backlash at all (measured: 140 um, 200 um and 1 mm give bit-identical records
+at that operating point, and their error equals the 50 um model's within its realisation scatter).
+
+What this module does, for a nonlinear candidate (an effect with a mesh-force law) confirmed on the whole record
+(:func:`compare.attribution._confirm_on_record`): :func:`profile_ladder` puts each fitted parameter in turn on a
+ladder of values around the fit (offsets :data:`LADDER_DU` in the search coordinate, plus both bounds), each
+simulated on the whole record :data:`REALISATIONS` times (the value scaled by ``1 + k 1e-12``,
+:func:`twin_params`). A regular record repeats its error to ~1e-12 dB over such twins (the loop is deterministic
+and smooth in its parameters); a chaotic one does not (:attr:`Profile.chaotic`). The fit becomes the value of
+lowest mean error; the values whose mean error is within ``2 s sqrt((c + c_best) / R)`` of it are consistent
+with the measurement (``s`` the realisation scatter pooled over the chaotic values, ``c`` 1 for a chaotic value,
+0 for a regular one: two means of ``R`` draws differ by that at about 2 sigma; two regular values only when
+their errors are equal), and the interval runs between the nearest rejected values on either side. Where every
+value up to a bound is consistent the interval is open on that side: the measurement does not bound the
+parameter there.
+
+References
+----------
+Strogatz, S. H. (2015). Nonlinear Dynamics and Chaos, 2nd ed., sec. 9.3 (sensitive dependence on initial
+    conditions: nearby trajectories separate exponentially, so only statistics of a chaotic record are
+    reproducible).
+Kahraman, A. & Singh, R. (1990). Non-linear dynamics of a spur gear pair. J. Sound Vib. 142(1), 49-75
+    (backlash: no-impact, single-sided and double-sided impact regimes; chaos in the latter two).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from compare.fitspace import FitSpace
+
+#: relative change of every float parameter between two realisations of the same fit
+REALISATION_STEP = 1e-12
+#: ladder offsets in the search coordinate (u in [0, 1]; for backlash 0.1 is a factor 2), both bounds added
+LADDER_DU = (-0.3, -0.2, -0.1, -0.05, 0.0, 0.05, 0.1, 0.2, 0.3)
+#: realisations per ladder value
+REALISATIONS = 2
+#: two errors closer than this (dB) are the same record's
+SAME_ERROR_DB = 1e-9
+#: realisations of a chaotic model whose mean views a comparison reads (compare.comparison.evaluate, ensemble)
+ENSEMBLE = 4
+
+
+def twin_params(params: dict, space: FitSpace, k: int = 1) -> dict:
+    """``params`` with every fitted parameter of ``space`` scaled by ``1 + k REALISATION_STEP`` (by
+    ``1 - k REALISATION_STEP`` where that would pass its upper bound); the other values kept."""
+    out = dict(params)
+    for p in space.params:
+        v = float(params[p.name])
+        up = v * (1.0 + k * REALISATION_STEP)
+        out[p.name] = up if up <= p.hi else v * (1.0 - k * REALISATION_STEP)
+    return out
+
+
+@dataclass
+class Profile:
+    """One parameter's ladder: its values (SI), the errors (dB) per value and realisation, what they give."""
+
+    parameter: str
+    values: np.ndarray          # (n,)
+    errors_db: np.ndarray       # (n, R), raw total errors
+    at_bound: tuple             # (lower, upper): whether values[0] / values[-1] is the parameter's bound
+
+    @property
+    def mean_db(self) -> np.ndarray:
+        return self.errors_db.mean(axis=1)
+
+    @property
+    def chaotic(self) -> np.ndarray:
+        """Per value: whether its realisations' errors differ (a regular record repeats them to ~1e-12 dB)."""
+        e = self.errors_db
+        return np.isfinite(e).all(axis=1) & (np.ptp(e, axis=1) > SAME_ERROR_DB)
+
+    @property
+    def scatter_db(self) -> float:
+        """The realisation scatter pooled over the chaotic values (dB, 1-sigma of one draw; 0: none chaotic)."""
+        e = self.errors_db[self.chaotic]
+        return float(np.sqrt(np.mean(np.var(e, axis=1, ddof=1)))) if len(e) and e.shape[1] > 1 else 0.0
+
+    @property
+    def best(self) -> int:
+        return int(np.argmin(self.mean_db))
+
+    def consistent(self) -> np.ndarray:
+        """Per value: whether its mean error is within ``2 s sqrt((c + c_best) / R)`` of the lowest mean (``c``
+        1 for a chaotic value, 0 for a regular one: two regular values are consistent only with equal errors,
+        the plateau where the parameter no longer enters the record)."""
+        m, c = self.mean_db, self.chaotic.astype(float)
+        r = self.errors_db.shape[1]
+        b = self.best
+        return m <= m[b] + 2.0 * self.scatter_db * np.sqrt((c + c[b]) / r) + SAME_ERROR_DB
+
+    def interval(self) -> tuple[float | None, float | None]:
+        """The nearest ladder values below and above the consistent ones (:meth:`consistent`) that the
+        measurement rejects: the parameter lies between them. ``None`` on a side where every value up to the
+        bound is consistent (the measurement does not bound it there)."""
+        ok = np.flatnonzero(self.consistent())
+        lo, hi = int(ok.min()), int(ok.max())
+        lo_v = float(self.values[lo - 1]) if lo > 0 else (None if self.at_bound[0] else float(self.values[0]))
+        hi_v = (float(self.values[hi + 1]) if hi < len(self.values) - 1
+                else (None if self.at_bound[1] else float(self.values[-1])))
+        return lo_v, hi_v
+
+    def sigma(self) -> float:
+        """A 1-sigma for the report: a quarter of the interval's width; infinite when it is open."""
+        lo, hi = self.interval()
+        return math.inf if lo is None or hi is None else (hi - lo) / 4.0
+
+
+def ladder_points(space: FitSpace, params: dict) -> list[tuple[str, np.ndarray, tuple]]:
+    """Per fitted parameter of ``space``: (name, ladder values around ``params``, (lower, upper) bound in it)."""
+    out = []
+    for p in space.params:
+        u0 = float(p.to_u(params[p.name]))
+        u = np.unique(np.clip(np.r_[0.0, u0 + np.asarray(LADDER_DU), 1.0], 0.0, 1.0))
+        v = np.unique(p.from_u(u))
+        out.append((p.name, v, (True, True)))
+    return out
+
+
+def profile_ladder(space: FitSpace, params: dict, simulate_errors) -> list[Profile]:
+    """:class:`Profile` of every fitted parameter of ``space`` around ``params`` (the others held there).
+
+    ``simulate_errors(list_of_param_dicts) -> list of raw total errors (dB)`` simulates and evaluates one batch
+    on the whole record (the caller's solver, seed and baseline)."""
+    plans = ladder_points(space, params)
+    trials = [twin_params({**params, name: float(v)}, space, k) for name, vs, _ in plans for v in vs
+              for k in range(REALISATIONS)]
+    errors = np.asarray(simulate_errors(trials), float)
+    out, i = [], 0
+    for name, vs, bounds in plans:
+        n = len(vs) * REALISATIONS
+        out.append(Profile(name, vs, errors[i:i + n].reshape(len(vs), REALISATIONS), bounds))
+        i += n
+    return out
+
+
+def twin_effect(effect, k: int):
+    """``effect`` with its fitted parameters scaled by ``1 + k 1e-12`` (:func:`twin_params`)."""
+    from dataclasses import replace
+
+    from compare.fitspace import fit_space
+
+    space = fit_space(type(effect))
+    return replace(effect, **twin_params(effect.params(), space, k)) if space.n else effect
+
+
+def chaotic_realisations(ref, model, *, seed: int = 0, extra_effects: tuple = (), solver: dict | None = None,
+                         n: int = ENSEMBLE) -> tuple:
+    """Simulate ``model`` (plus ``extra_effects``) at the reference; when it holds a nonlinear effect with fitted
+    parameters, ``n`` realisations of it (:func:`twin_effect`) in one batch. Returns ``(record, others)``:
+    ``others`` the further realisations when they differ from the first (a chaotic record: compare its mean
+    views, :func:`compare.comparison.evaluate`), else empty."""
+    from compare.comparison import simulate_model
+    from compare.fitspace import fit_space
+
+    effects = {e.name: e for e in model.effects}
+    effects.update({e.name: e for e in extra_effects})
+    nonlinear = [e for e in effects.values() if e.is_nonlinear and fit_space(type(e)).n]
+    extras = [tuple(extra_effects)]
+    if nonlinear:
+        names = {e.name for e in nonlinear}
+        kept = tuple(e for e in extra_effects if e.name not in names)
+        extras += [kept + tuple(twin_effect(e, k) for e in nonlinear) for k in range(1, n)]
+    ys = simulate_model(ref, model, extra_effects_list=extras, seed=seed, solver=solver,
+                        duration_s=ref.model_duration_s())
+    y, others = ys[0], ys[1:]
+    if all(np.array_equal(y, o) for o in others):
+        others = []
+    return y, others
+

@@ -1,0 +1,141 @@
+"""Fitting a chaotic record (compare.chaos): the ladder's interval logic, and the premises it rests on.
+
+Sources: the interval rule of compare.chaos (module docstring) on constructed error tables, where the answer
+follows from the rule by hand; and the backlash regimes of Kahraman & Singh (1990) on the simulator: at the
+backlash example's operating point (compare.synthetic.HIDDEN_EXAMPLES["backlash"]: spur-gds, 1000 rpm, 2 N m,
+a grade-9 profile error) a backlash larger than the dynamic transmission error's excursion is never closed, so
+the record does not depend on it (bit for bit), while at 50 um the back flanks are struck and a 1e-12 change of
+the backlash grows into an O(1) change of the record, its RMS kept.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from compare.chaos import REALISATION_STEP, Profile, profile_ladder, twin_params
+from compare.fitspace import fit_space
+from datagen.effects import get
+
+VALUES = np.array([1e-6, 5e-6, 10e-6, 20e-6, 40e-6, 80e-6, 160e-6, 1e-3])
+
+
+def test_plateau_up_to_the_bound_leaves_the_interval_open_there():
+    """Regular records from 40 um up (identical errors: the parameter no longer enters), chaotic below with a
+    0.1 dB scatter and means 1 dB and more above the plateau: consistent are 40 um..1 mm, the nearest rejected
+    value below is 20 um, nothing bounds it above."""
+    e = np.array([[5.0, 5.1], [4.0, 4.1], [3.5, 3.3], [3.2, 3.0], [2.0, 2.0], [2.0, 2.0], [2.0, 2.0], [2.0, 2.0]])
+    p = Profile("backlash_m", VALUES, e, (True, True))
+    assert p.chaotic.tolist() == [True, True, True, True, False, False, False, False]
+    assert p.interval() == (20e-6, None)
+    assert p.sigma() == np.inf
+
+
+def test_chaotic_minimum_is_bracketed_by_the_nearest_rejected_values():
+    """Every value chaotic with realisations 0.2 dB apart (pooled s = 0.141 dB, R = 2: consistent within
+    2 s sqrt(2 / 2) = 0.283 dB of the lowest mean, 1.5): 20 um (mean 1.75) is consistent, 10 um (2.6) and
+    80 um (1.9) are not, so the interval is [10, 80] um and the fit 40 um."""
+    m = np.array([4.0, 3.0, 2.6, 1.75, 1.5, 1.9, 2.5, 3.0])
+    e = np.stack([m - 0.1, m + 0.1], axis=1)
+    p = Profile("backlash_m", VALUES, e, (True, True))
+    assert p.scatter_db == pytest.approx(np.sqrt(0.02), rel=1e-12)
+    assert p.best == 4
+    assert p.interval() == (10e-6, 80e-6)
+    assert p.sigma() == pytest.approx((80e-6 - 10e-6) / 4)
+
+
+def test_regular_ladder_without_plateau_is_bracketed_by_its_neighbours():
+    """No chaotic value (s = 0): only equal errors are consistent; a strict minimum is bracketed by its two
+    neighbours."""
+    m = np.array([4.0, 3.0, 2.6, 1.75, 1.5, 1.9, 2.5, 3.0])
+    p = Profile("backlash_m", VALUES, np.stack([m, m], axis=1), (True, True))
+    assert not p.chaotic.any() and p.scatter_db == 0.0
+    assert p.interval() == (20e-6, 80e-6)
+
+
+def test_ladder_spans_both_bounds_and_its_realisations_stay_inside_them():
+    """profile_ladder asks for every ladder value R times, the first unchanged, the others 1e-12 apart and
+    within the bounds even at the upper bound (backlash 1 mm)."""
+    space = fit_space(get("backlash"))
+    asked = []
+
+    def errors(trials):
+        asked.extend(trials)
+        return [1.0] * len(trials)
+
+    (prof,) = profile_ladder(space, {"backlash_m": 1e-3}, errors)
+    p = space.params[0]
+    v = [t["backlash_m"] for t in asked]
+    assert max(v) <= p.hi and min(v) >= p.lo
+    assert prof.values[0] == pytest.approx(p.from_u(0.0)) and prof.values[-1] == pytest.approx(p.hi)
+    assert prof.errors_db.shape == (len(prof.values), len(asked) // len(prof.values))
+    tw = twin_params({"backlash_m": 1e-3}, space)["backlash_m"]
+    assert tw < 1e-3 and tw == pytest.approx(1e-3 * (1 - REALISATION_STEP), rel=1e-15)
+
+
+def _backlash_records(values):
+    from compare.synthetic import HIDDEN_EXAMPLES
+    from datagen.geometry import preset
+    from datagen.simulate import Case, OperatingPoint, simulate
+
+    ex = HIDDEN_EXAMPLES["backlash"]
+    cases = [Case(preset("spur-gds"), OperatingPoint(ex.speed_rpm, ex.torque_nm), duration_s=1.0,
+                  effects=ex.known + ({"name": "backlash", "backlash_m": b},)) for b in values]
+    return [s.channels["dte_m"] for s in simulate(cases)]
+
+
+def test_backlash_example_is_chaotic_and_a_large_backlash_is_never_closed():
+    """Premises of compare.chaos on the simulator (module docstring): 140 um and 1 mm give the same record bit
+    for bit (the back flanks never meet); 50 um and 50 um x (1 + 1e-12) differ sample by sample by more than 30 %
+    of the RMS (measured 68 %: sensitive dependence), while their RMS agree within 5 % (measured 0.3 %): a chaotic
+    record reproduces its statistics, not its samples, which is why the ladder compares means over
+    realisations."""
+    b50 = 50e-6
+    y140, y1000, y50, y50b = _backlash_records([140e-6, 1e-3, b50, b50 * (1 + REALISATION_STEP)])
+    assert np.array_equal(y140, y1000)
+    rms, rms_b = np.sqrt(np.mean(y50 ** 2)), np.sqrt(np.mean(y50b ** 2))
+    assert np.sqrt(np.mean((y50b - y50) ** 2)) > 0.3 * rms
+    assert abs(rms_b / rms - 1) < 0.05
+    assert not np.array_equal(y140, y50)
+
+
+def test_a_comparison_reads_a_chaotic_model_by_its_realisations_and_a_regular_one_once():
+    """compare.chaos.chaotic_realisations: a model whose nonlinear effect makes the record chaotic (the backlash
+    example's 50 um) comes back with ENSEMBLE - 1 further realisations, each unlike the first; the same model at
+    140 um (never closed: regular) and a model without a nonlinear effect come back with none, and the first
+    record is the model's own (same as simulating it once)."""
+    from compare.chaos import ENSEMBLE, chaotic_realisations
+    from compare.comparison import prepare_reference, simulate_model
+    from compare.model import ComparisonModel
+    from compare.synthetic import HIDDEN_EXAMPLES, hidden_effect_measurement
+    from datagen.effects import build_effects
+
+    m, ex = hidden_effect_measurement("backlash", duration_s=0.5)
+    ref = prepare_reference(m)
+    chaotic = ComparisonModel(effects=build_effects(ex.known + ({"name": "backlash", "backlash_m": 50e-6},)))
+    y, others = chaotic_realisations(ref, chaotic)
+    assert len(others) == ENSEMBLE - 1
+    assert all(np.sqrt(np.mean((o - y) ** 2)) > 0.1 * np.sqrt(np.mean(y ** 2)) for o in others)
+    (y_once,) = simulate_model(ref, chaotic)
+    assert np.array_equal(y, y_once)
+    regular = ComparisonModel(effects=build_effects(ex.known + ({"name": "backlash", "backlash_m": 140e-6},)))
+    assert chaotic_realisations(ref, regular)[1] == []
+    assert chaotic_realisations(ref, HIDDEN_EXAMPLES["backlash"].model())[1] == []
+
+
+def test_an_open_interval_is_written_to_json_and_html_as_unbounded():
+    """A chaotic candidate's interval goes into --json as [low, null] (valid under compare.schema) and into the
+    HTML report as 'no bound'."""
+    import jsonschema
+
+    from compare.candidates import CandidateResult
+    from compare.report import _interval_text
+    from compare.schema import SCHEMA
+
+    c = CandidateResult(effect="backlash", signature="", params={"backlash_m": 75e-6}, sigma={"backlash_m": np.inf},
+                        error_db=1.0, baseline_error_db=2.0, view_error_db={}, window="whole record", n_evaluations=30,
+                        interval={"backlash_m": (20e-6, None)}, realisation_scatter_db=0.2)
+    d = c.to_dict()
+    assert d["interval"] == {"backlash_m": [20e-6, None]} and d["sigma"] == {"backlash_m": None}
+    item = SCHEMA["properties"]["attribution"]["properties"]["candidates"]["items"]
+    jsonschema.validate(d, item)
+    assert _interval_text(d["interval"]["backlash_m"]) == " in [2e-05, no bound] (chaotic record)"
