@@ -180,3 +180,13 @@ def chaotic_realisations(ref, model, *, seed: int = 0, extra_effects: tuple = ()
         others = []
     return y, others
 
+
+def describe_interval(interval) -> str:
+    """A fitted parameter's interval for the CLI and the report: " in [lo, hi] (chaotic record)", an open side
+    (None) as "no bound"."""
+    lo, hi = interval
+    if lo is None and hi is None:
+        return " (not bounded by the measurement: chaotic record)"
+    side = [f"{v:.3g}" if v is not None else "no bound" for v in (lo, hi)]
+    return f" in [{side[0]}, {side[1]}] (chaotic record)"
+

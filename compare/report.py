@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from compare.chaos import describe_interval
 from gearpit import __version__
 from gearpit.atomic import atomic_path
 
@@ -114,14 +115,6 @@ def _fmt(v, nd=3):
     return str(v)
 
 
-def _interval_text(iv) -> str:
-    """A chaotic fit's interval (compare.chaos): " in [lo, hi]", an open side as "no bound"."""
-    lo, hi = iv
-    if lo is None and hi is None:
-        return " (not bounded by the measurement: chaotic record)"
-    return f" in [{_fmt(lo) if lo is not None else 'no bound'}, {_fmt(hi) if hi is not None else 'no bound'}] (chaotic record)"
-
-
 def _calibration_html(cal: dict | None, escalation: dict | None = None) -> list[str]:
     """The nuisance-calibration section (compare.calibration; why it ran: compare.escalation)."""
     why = []
@@ -200,7 +193,7 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
         parts.append("<h2>Candidate effects</h2>")
         rows, cls = [], []
         for c in att["candidates"]:
-            ps = ", ".join(f"{k}={_fmt(v)}" + (_interval_text(c["interval"][k]) if k in c.get("interval", {}) else
+            ps = ", ".join(f"{k}={_fmt(v)}" + (describe_interval(c["interval"][k]) if k in c.get("interval", {}) else
                                                 (f" \u00b1 {_fmt(c['sigma'].get(k))}" if k in c["sigma"] else ""))
                            for k, v in c["params"].items())
             rows.append([c["effect"], f"{100 * c['reduction']:.1f} %", _fmt(c["error_db"]), _fmt(c["baseline_error_db"]),

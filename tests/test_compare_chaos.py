@@ -124,11 +124,11 @@ def test_a_comparison_reads_a_chaotic_model_by_its_realisations_and_a_regular_on
 
 def test_an_open_interval_is_written_to_json_and_html_as_unbounded():
     """A chaotic candidate's interval goes into --json as [low, null] (valid under compare.schema) and into the
-    HTML report as 'no bound'."""
+    CLI's and the HTML report's text as 'no bound'."""
     import jsonschema
 
     from compare.candidates import CandidateResult
-    from compare.report import _interval_text
+    from compare.chaos import describe_interval
     from compare.schema import SCHEMA
 
     c = CandidateResult(effect="backlash", signature="", params={"backlash_m": 75e-6}, sigma={"backlash_m": np.inf},
@@ -138,4 +138,4 @@ def test_an_open_interval_is_written_to_json_and_html_as_unbounded():
     assert d["interval"] == {"backlash_m": [20e-6, None]} and d["sigma"] == {"backlash_m": None}
     item = SCHEMA["properties"]["attribution"]["properties"]["candidates"]["items"]
     jsonschema.validate(d, item)
-    assert _interval_text(d["interval"]["backlash_m"]) == " in [2e-05, no bound] (chaotic record)"
+    assert describe_interval(d["interval"]["backlash_m"]) == " in [2e-05, no bound] (chaotic record)"

@@ -31,6 +31,7 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from compare.chaos import describe_interval
     from compare.ledger import history_table
     from compare.workflow import run as run_loop
 
@@ -53,7 +54,8 @@ def run(args: argparse.Namespace) -> int:
     if out.attribution is not None:
         print("candidate effects (error reduction, fitted parameters +/- 1 sigma):")
         for cand in out.attribution.candidates:
-            ps = ", ".join(f"{k}={v:.4g} +/- {cand.sigma[k]:.2g}" if k in cand.sigma else f"{k}={v}"
+            ps = ", ".join(f"{k}={v:.4g}" + describe_interval(cand.interval[k]) if k in cand.interval else
+                           (f"{k}={v:.4g} +/- {cand.sigma[k]:.2g}" if k in cand.sigma else f"{k}={v}")
                            for k, v in cand.params.items())
             res = out.attribution.resolution
             settled = res is not None and res.get("claimed") == cand.effect and res.get("before") != cand.effect
