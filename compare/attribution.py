@@ -33,7 +33,7 @@ import numpy as np
 
 from compare.candidates import (Attribution, AttributionSettings, CandidateResult, choose_claim, passes_claim_rule,
                                 rivals_of, unexplained_of)
-from compare.chaos import chaotic_realisations, profile_ladder
+from compare.chaos import chaotic_realisations, may_be_chaotic, profile_ladder
 from compare.comparison import NOISE_DRAWS, Reference, evaluate, simulate_model
 from compare.error import effective_count
 from compare.fitspace import CHAIN_EFFECTS, fit_space
@@ -216,7 +216,7 @@ def _confirm_on_record(results: list, ref: Reference, model, settings: Attributi
         i = int(np.argmin([ev.total_db for ev in evs]))     # the raw error, what the fits minimise
         ev = evs[i]
         c.params = dict(ps[i])
-        if get(c.effect)().is_nonlinear and fit_space(get(c.effect)).n:
+        if may_be_chaotic(get(c.effect)):
             ev, n = _profile_nonlinear(c, ev, ref, model, settings, solver)
             n_sims += n
         c.noise_view_db = dict(base.noise_view_db or {})

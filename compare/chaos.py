@@ -38,7 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from compare.fitspace import FitSpace
+from compare.fitspace import FitSpace, fit_space
 
 #: relative change of every float parameter between two realisations of the same fit
 REALISATION_STEP = 1e-12
@@ -68,9 +68,8 @@ class Profile:
     """One parameter's ladder: its values (SI), the errors (dB) per value and realisation, what they give."""
 
     parameter: str
-    values: np.ndarray          # (n,)
+    values: np.ndarray          # (n,), from the lower bound to the upper one (:func:`ladder_points`)
     errors_db: np.ndarray       # (n, R), raw total errors
-    at_bound: tuple             # (lower, upper): whether values[0] / values[-1] is the parameter's bound
 
     @property
     def mean_db(self) -> np.ndarray:
@@ -107,9 +106,8 @@ class Profile:
         bound is consistent (the measurement does not bound it there)."""
         ok = np.flatnonzero(self.consistent())
         lo, hi = int(ok.min()), int(ok.max())
-        lo_v = float(self.values[lo - 1]) if lo > 0 else (None if self.at_bound[0] else float(self.values[0]))
-        hi_v = (float(self.values[hi + 1]) if hi < len(self.values) - 1
-                else (None if self.at_bound[1] else float(self.values[-1])))
+        lo_v = float(self.values[lo - 1]) if lo > 0 else None
+        hi_v = float(self.values[hi + 1]) if hi < len(self.values) - 1 else None
         return lo_v, hi_v
 
     def sigma(self) -> float:
@@ -118,14 +116,20 @@ class Profile:
         return math.inf if lo is None or hi is None else (hi - lo) / 4.0
 
 
-def ladder_points(space: FitSpace, params: dict) -> list[tuple[str, np.ndarray, tuple]]:
-    """Per fitted parameter of ``space``: (name, ladder values around ``params``, (lower, upper) bound in it)."""
+def may_be_chaotic(effect_cls) -> bool:
+    """Whether an effect's record may be chaotic and has parameters to profile: a mesh-force law (nonlinear)
+    and at least one fitted parameter."""
+    return effect_cls().is_nonlinear and fit_space(effect_cls).n > 0
+
+
+def ladder_points(space: FitSpace, params: dict) -> list[tuple[str, np.ndarray]]:
+    """Per fitted parameter of ``space``: (name, ladder values around ``params``, both bounds included)."""
     out = []
     for p in space.params:
         u0 = float(p.to_u(params[p.name]))
         u = np.unique(np.clip(np.r_[0.0, u0 + np.asarray(LADDER_DU), 1.0], 0.0, 1.0))
         v = np.unique(p.from_u(u))
-        out.append((p.name, v, (True, True)))
+        out.append((p.name, v))
     return out
 
 
@@ -135,13 +139,13 @@ def profile_ladder(space: FitSpace, params: dict, simulate_errors) -> list[Profi
     ``simulate_errors(list_of_param_dicts) -> list of raw total errors (dB)`` simulates and evaluates one batch
     on the whole record (the caller's solver, seed and baseline)."""
     plans = ladder_points(space, params)
-    trials = [twin_params({**params, name: float(v)}, space, k) for name, vs, _ in plans for v in vs
+    trials = [twin_params({**params, name: float(v)}, space, k) for name, vs in plans for v in vs
               for k in range(REALISATIONS)]
     errors = np.asarray(simulate_errors(trials), float)
     out, i = [], 0
-    for name, vs, bounds in plans:
+    for name, vs in plans:
         n = len(vs) * REALISATIONS
-        out.append(Profile(name, vs, errors[i:i + n].reshape(len(vs), REALISATIONS), bounds))
+        out.append(Profile(name, vs, errors[i:i + n].reshape(len(vs), REALISATIONS)))
         i += n
     return out
 
@@ -149,8 +153,6 @@ def profile_ladder(space: FitSpace, params: dict, simulate_errors) -> list[Profi
 def twin_effect(effect, k: int):
     """``effect`` with its fitted parameters scaled by ``1 + k 1e-12`` (:func:`twin_params`)."""
     from dataclasses import replace
-
-    from compare.fitspace import fit_space
 
     space = fit_space(type(effect))
     return replace(effect, **twin_params(effect.params(), space, k)) if space.n else effect
@@ -163,11 +165,10 @@ def chaotic_realisations(ref, model, *, seed: int = 0, extra_effects: tuple = ()
     ``others`` the further realisations when they differ from the first (a chaotic record: compare its mean
     views, :func:`compare.comparison.evaluate`), else empty."""
     from compare.comparison import simulate_model
-    from compare.fitspace import fit_space
 
     effects = {e.name: e for e in model.effects}
     effects.update({e.name: e for e in extra_effects})
-    nonlinear = [e for e in effects.values() if e.is_nonlinear and fit_space(type(e)).n]
+    nonlinear = [e for e in effects.values() if may_be_chaotic(type(e))]
     extras = [tuple(extra_effects)]
     if nonlinear:
         names = {e.name for e in nonlinear}

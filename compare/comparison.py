@@ -142,8 +142,12 @@ def evaluate(ref: Reference, y: np.ndarray, fs_hz: float, *, seed: int = 0, keep
         y = y + np.sqrt(s2) * rng.standard_normal(y.size)
     v = analyse(y, fs_hz, track, plan, keep_curves=keep_curves)
     if len(ensemble):
-        members = [v] + [analyse(np.asarray(e, float) + (np.sqrt(s2) * np.random.default_rng([seed, k]).standard_normal(
-            len(e)) if s2 > 0 else 0.0), fs_hz, track, plan) for k, e in enumerate(ensemble, start=1)]
+        members = [v]
+        for k, e in enumerate(ensemble, start=1):
+            e = np.asarray(e, float)
+            if s2 > 0:
+                e = e + np.sqrt(s2) * np.random.default_rng([seed, k]).standard_normal(e.size)
+            members.append(analyse(e, fs_hz, track, plan))
         v = SignalViews(levels=np.mean([m.levels for m in members], axis=0),
                         floors=np.mean([m.floors for m in members], axis=0), curves=v.curves)
     q = ref.reliability
@@ -233,9 +237,8 @@ def compare(measurement: Measurement, model, *, seed: int = 0, reference: Refere
     """Compare ``model`` (a :class:`compare.model.ComparisonModel`) with ``measurement`` as it is (no nuisance
     calibration: :func:`compare.calibration.calibrated_compare` calibrates first; ``calibration`` only records
     the one that made ``model``)."""
-    from compare.disagreements import rank_disagreements
-
     from compare.chaos import chaotic_realisations
+    from compare.disagreements import rank_disagreements
 
     ref = reference if reference is not None else prepare_reference(measurement)
     y, others = chaotic_realisations(ref, model, seed=seed)

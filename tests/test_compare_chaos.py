@@ -24,7 +24,7 @@ def test_plateau_up_to_the_bound_leaves_the_interval_open_there():
     0.1 dB scatter and means 1 dB and more above the plateau: consistent are 40 um..1 mm, the nearest rejected
     value below is 20 um, nothing bounds it above."""
     e = np.array([[5.0, 5.1], [4.0, 4.1], [3.5, 3.3], [3.2, 3.0], [2.0, 2.0], [2.0, 2.0], [2.0, 2.0], [2.0, 2.0]])
-    p = Profile("backlash_m", VALUES, e, (True, True))
+    p = Profile("backlash_m", VALUES, e)
     assert p.chaotic.tolist() == [True, True, True, True, False, False, False, False]
     assert p.interval() == (20e-6, None)
     assert p.sigma() == np.inf
@@ -36,7 +36,7 @@ def test_chaotic_minimum_is_bracketed_by_the_nearest_rejected_values():
     80 um (1.9) are not, so the interval is [10, 80] um and the fit 40 um."""
     m = np.array([4.0, 3.0, 2.6, 1.75, 1.5, 1.9, 2.5, 3.0])
     e = np.stack([m - 0.1, m + 0.1], axis=1)
-    p = Profile("backlash_m", VALUES, e, (True, True))
+    p = Profile("backlash_m", VALUES, e)
     assert p.scatter_db == pytest.approx(np.sqrt(0.02), rel=1e-12)
     assert p.best == 4
     assert p.interval() == (10e-6, 80e-6)
@@ -47,7 +47,7 @@ def test_regular_ladder_without_plateau_is_bracketed_by_its_neighbours():
     """No chaotic value (s = 0): only equal errors are consistent; a strict minimum is bracketed by its two
     neighbours."""
     m = np.array([4.0, 3.0, 2.6, 1.75, 1.5, 1.9, 2.5, 3.0])
-    p = Profile("backlash_m", VALUES, np.stack([m, m], axis=1), (True, True))
+    p = Profile("backlash_m", VALUES, np.stack([m, m], axis=1))
     assert not p.chaotic.any() and p.scatter_db == 0.0
     assert p.interval() == (20e-6, 80e-6)
 
