@@ -16,6 +16,7 @@ Harris, F. J. (1978). On the use of windows for harmonic analysis with the DFT. 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -32,9 +33,12 @@ ORDER_MASK_BINS = 2
 TINY = 1e-30
 
 
+@lru_cache(maxsize=16)
 def hann(n: int) -> np.ndarray:
-    """Periodic Hann window."""
-    return 0.5 - 0.5 * np.cos(2 * np.pi * np.arange(n) / n)
+    """Periodic Hann window (cached, read-only: every view of every comparison takes the same few lengths)."""
+    w = 0.5 - 0.5 * np.cos(2 * np.pi * np.arange(n) / n)
+    w.flags.writeable = False
+    return w
 
 
 def power_spectrum(x: np.ndarray) -> np.ndarray:

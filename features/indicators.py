@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from features.statistics import integer_power
 from features.tsa import mesh_orders, order_amplitudes, split_tsa
 from gearpit.errors import require
 
@@ -77,7 +78,7 @@ def _normalised_moment(y: np.ndarray, order: int, mean_variance: float | None = 
     m2 = float(np.mean(d * d)) if mean_variance is None else float(mean_variance)
     if m2 <= 0:
         return float("nan")
-    return float(np.mean(d**order) / m2 ** (order / 2))
+    return float(np.mean(integer_power(d, order)) / m2 ** (order / 2))
 
 
 def fm0(tsa: np.ndarray, mesh_order: int) -> float:

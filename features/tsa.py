@@ -33,7 +33,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.interpolate import CubicSpline, PchipInterpolator
+from scipy.interpolate import PchipInterpolator
+from scipy.ndimage import map_coordinates, spline_filter1d
 from scipy.signal import firwin, resample_poly
 
 from gearpit.errors import require, require_positive
@@ -186,7 +187,15 @@ def angular_resample(x: np.ndarray, fs_hz: float, track: AngleTrack, *, samples_
 class TimeInterpolant:
     """A record made continuous in time (upsampled by ``oversample``, then a cubic spline), to be resampled on
     several angle tracks (:meth:`resample`: the pinion's and the wheel's) at the cost of one upsampling and one
-    spline; each resampling equals :func:`angular_resample`'s exactly (it is the same computation)."""
+    spline; each resampling equals :func:`angular_resample`'s exactly (it is the same computation).
+
+    The spline is the interpolating cubic spline on the (upsampled) sample grid, built as B-spline coefficients
+    by the recursive prefilter of Unser et al. (1991) (:func:`scipy.ndimage.spline_filter1d`) and evaluated by
+    :func:`scipy.ndimage.map_coordinates`: ~4x faster than :class:`scipy.interpolate.CubicSpline` on a 2 s
+    record, the same function inside the record (they differ only in the end condition, mirror here and
+    not-a-knot there; measured 4e-11 of the RMS more than 40 upsampled samples from either end), where the
+    upsampling filter's own edge effect is larger anyway.
+    """
 
     def __init__(self, x: np.ndarray, fs_hz: float, *, oversample: int = 4):
         a = np.asarray(x, dtype=float)
@@ -198,10 +207,15 @@ class TimeInterpolant:
         if oversample > 1:
             # Kaiser beta 8.6 (~80 dB stop band, ~1e-4 pass-band ripple), 20 input samples each side
             taps = firwin(2 * 20 * oversample + 1, 1.0 / oversample, window=("kaiser", 8.6))
-            up = resample_poly(a, oversample, 1, window=taps)
-            self.spline = CubicSpline(np.arange(up.size) / (fs_hz * oversample), up)
-        else:
-            self.spline = CubicSpline(np.arange(a.size) / fs_hz, a)
+            a = resample_poly(a, oversample, 1, window=taps)
+        self.rate_hz = fs_hz * oversample
+        self.coefficients = spline_filter1d(a, order=3, mode="mirror")
+
+    def at(self, times_s: np.ndarray) -> np.ndarray:
+        """The spline at ``times_s`` (s, within the record)."""
+        t = np.asarray(times_s, dtype=float)
+        return map_coordinates(self.coefficients, t.reshape(1, -1) * self.rate_hz, order=3, prefilter=False,
+                               mode="mirror").reshape(t.shape)
 
     def resample(self, track: AngleTrack, *, samples_per_rev: int) -> np.ndarray:
         """The record at equal steps of ``track``'s angle, whole revolutions: ``(n_revolutions, samples_per_rev)``."""
@@ -213,8 +227,11 @@ class TimeInterpolant:
         n_rev = int(np.floor((track.angle_rad[-1] - track.angle_rad[0]) / TWO_PI + 1.0 / samples_per_rev + 1e-9))
         require(n_rev >= 1, "track", f"{n_rev} revolutions", ">= 1 whole revolution in the record")
         target = track.angle_rad[0] + TWO_PI * np.arange(n_rev * samples_per_rev) / samples_per_rev
-        times = PchipInterpolator(track.angle_rad, track.time_s)(target)
-        return self.spline(times).reshape(n_rev, samples_per_rev)
+        if track.angle_rad.size == 2:      # a constant speed: PCHIP through two knots is the straight line
+            times = np.interp(target, track.angle_rad, track.time_s)
+        else:
+            times = PchipInterpolator(track.angle_rad, track.time_s)(target)
+        return self.at(times).reshape(n_rev, samples_per_rev)
 
 
 @dataclass(frozen=True)
