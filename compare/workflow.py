@@ -28,7 +28,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from compare.candidates import Attribution, AttributionSettings
+from compare.candidates import Attribution, AttributionSettings, within_noise
 from compare.channels import resolution_message
 from compare.comparison import Comparison, prepare_reference
 from compare.escalation import EXPLAINED_REDUCTION, compare_and_attribute
@@ -138,6 +138,12 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
                         + f" (error {cal.error_before_db:.2f} -> {cal.error_db:.2f} dB)")
     if att is not None and att.resolution is not None:
         messages.append(resolution_message(att.resolution))
+    res = comparison.evaluation.residuals
+    if att is not None and not att.claimed and within_noise(res.excess_total_db, res.noise_total_db,
+                                                            settings or AttributionSettings()):
+        messages.append(f"the model agrees with the measurement within the noise (excess error "
+                        f"{res.excess_total_db:.2f} dB, below the noise error {res.noise_total_db:.2f} dB): "
+                        "there is nothing to attribute, and no effect is claimed")
     if att is not None and att.claimed and att.rivals:
         messages.append(f"claimed {att.claimed[0].effect}, but {', '.join(att.rivals)} lowers the error almost as "
                         "much: these views cannot tell them apart")
