@@ -156,7 +156,8 @@ def _secondary(value, where: str) -> dict:
 
 
 def _pair(value, where: str):
-    from datagen.geometry import pair_from_dict, preset
+    from datagen.geometry import preset
+    from datagen.pair_file import pair_from_dict
 
     if isinstance(value, str):
         return preset(value)

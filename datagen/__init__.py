@@ -1,13 +1,16 @@
 """Synthetic data generation, one module per stage of the pipeline.
 
-- ``geometry``   gear pair description, presets, validation, TOML loading
+- ``geometry``   gear pair description, presets, validation
+- ``pair_file``  a gear pair from its TOML / JSON form (mm, deg, GPa at the boundary)
+- ``design_checks``  undercut, rim, pointed tip, interference, contact ratio of a pair (run when it is built)
 - ``flank``      the flank pixel grid and the pit-depth maps living on it
 - ``pits``       pit maps from a spec: shape family, teeth, severity, seed (TOML ``[pits]``)
 - ``pitshapes``  drawing pits: ellipses, rectangles, progressive clusters, depth profiles
 - ``pitio``      pit maps as PNG (16-bit depth in um, or painted masks) and NPZ
 - ``photo``      pit masks extracted from a photo of a flank
-- ``compliance`` potential-energy tooth compliance terms (bending, shear, axial, fillet, Hertz)
+- ``compliance`` potential-energy tooth compliance terms (bending, shear, axial, fillet, Hertz), pair compliance table
 - ``stiffness``  time-varying mesh stiffness over a revolution, slices, pits
+- ``pit_stiffness``  how a pit map changes the compliances of the slices it touches (pit models, section loss)
 - ``centre_offset``  the pair at moving centres (eccentricity, hook 2c), on subdivided grid steps
 - ``lumped_model``     DOFs, mass / stiffness / damping matrices of the drive train (spur 6 DOF, helical 8)
 - ``mesh_excitation``  stiffness + effect deviations -> the periodic mesh record a simulation reads
@@ -19,6 +22,7 @@
 - ``output_channels``, ``decimation``  channels, anti-alias filtering and decimation to fs
 - ``simulate``   THE orchestrator: Case -> Signals (CLI, datasets, comparison and tests call it)
 - ``effects/``   the effect contract and the physical effects (registry)
-- ``sweep``, ``draws``, ``sampling``  dataset sweep configs and per-sample draws from (seed, index)
+- ``sweep``, ``class_grid``, ``draws``, ``sampling``  dataset sweep configs, their class grid and per-sample
+  draws from (seed, index)
 - ``dataset``, ``generate``, ``torch_dataset``  dataset storage, parallel / Dask generation, torch reader
 """

@@ -107,7 +107,8 @@ def slots_at_centre_offset(stiffness, dx_m, dy_m, *, subdivisions: int = 1) -> n
     >>> bool(np.array_equal(k[::4, :-1], ms.k_slots_n_per_m[:64]))
     True
     """
-    from datagen.stiffness import _slices, _slot_positions, pair_compliance
+    from datagen.compliance import pair_compliance
+    from datagen.stiffness import face_slices, slot_positions
 
     require(isinstance(subdivisions, int) and not isinstance(subdivisions, bool) and 1 <= subdivisions <= 64,
             "subdivisions", subdivisions, "an integer in [1, 64]")
@@ -129,12 +130,12 @@ def slots_at_centre_offset(stiffness, dx_m, dy_m, *, subdivisions: int = 1) -> n
     start = pair.contact_start_m + (a * np.sin(alpha) - a_w * math.sin(alpha_w))   # A' from T1
     dg = rb1 * (alpha - alpha_w - beta)
     h = pair.base_pitch_m / ppc
-    dw, _, shift = _slices(pair, stiffness.n_slices)
+    dw, _, shift = face_slices(pair, stiffness.n_slices)
     slots = np.arange(-1, S)                                                        # -1: the early pair
     # slice stiffness in contact at the grid samples (each at its own displacement): (n_grid, S + 1, slices)
     dg_grid = dg[::q]
     u = (np.arange(dg_grid.size) % ppc) / ppc
-    v = dw / pair_compliance(pair)(_slot_positions(pair, u, slots, shift) + dg_grid[:, None, None])
+    v = dw / pair_compliance(pair)(slot_positions(pair, u, slots, shift) + dg_grid[:, None, None])
     if stiffness._overrides:    # pitted pairs: scaled by the nominal pitted / healthy ratio at that sample
         k_nom = np.tile(stiffness._k_cycle, (n_cycles, 1, 1))
         cyc = np.arange(dg_grid.size) // ppc

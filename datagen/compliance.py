@@ -16,9 +16,13 @@ per unit face width (I = (2h)^3 / 12, A = 2h, h the half thickness), so that
 the bending, shear and axial compliance of ANY load point is a closed form in
 them (the moment (Y - y) cos a1 - h sin a1 expands into a polynomial in y).
 The same integrals, summed over the pixels a pit removes, give the section
-loss of a pitted slice (see :mod:`datagen.stiffness`). An independent slow
+loss of a pitted slice (see :mod:`datagen.pit_stiffness`). An independent slow
 reference (``scipy.integrate.quad`` on the angular form of PHYSICS.md) lives
 in ``tests/stiffness_reference.py``.
+
+The healthy compliance of a tooth pair (Hertz + both teeth) is tabulated once
+along the path of contact by :func:`pair_compliance`; :mod:`datagen.stiffness`
+assembles the mesh stiffness from that table.
 
 References
 ----------
@@ -48,6 +52,9 @@ SAINSOT_COEFFS = {
 
 #: shear correction factor of a rectangular section (Timoshenko), used in the shear energy
 SHEAR_FACTOR = 1.2
+
+#: points of the healthy compliance table along the line of action
+_TABLE_POINTS = 4097
 
 
 def sainsot_coefficient(which: str, h_f: float, theta_f: float) -> float:
@@ -183,3 +190,30 @@ def tooth_compliance(beam: ToothBeam, roll_rad, E: float, G: float) -> dict[str,
     W, A0 = beam.cumulative(Y)
     b, s, a = beam_compliance(a1, Y, h, W, A0, E, G)
     return {"bending": b, "shear": s, "axial": a, "fillet": fillet_compliance(beam, a1, Y, h, E)}
+
+
+@dataclass(frozen=True, eq=False)
+class PairCompliance:
+    """Healthy tooth-pair compliance per unit face width as a function of ``g`` (m/N * m)."""
+
+    pair: object
+    beams: dict
+    g_table_m: np.ndarray
+    c_table: np.ndarray
+    c_hertz: float
+
+    def __call__(self, g_m):
+        return np.interp(g_m, self.g_table_m, self.c_table)
+
+
+def pair_compliance(pair) -> PairCompliance:
+    """Tabulate the healthy pair compliance per unit width over the path of contact."""
+    E, nu = pair.material.youngs_modulus_pa, pair.material.poisson
+    G = pair.material.shear_modulus_pa
+    beams = {w: tooth_beam(pair, w) for w in ("pinion", "wheel")}
+    g = np.linspace(pair.contact_start_m, pair.contact_end_m, _TABLE_POINTS)
+    c_h = hertz_compliance(E, nu)
+    c = np.full_like(g, c_h)
+    for w, beam in beams.items():
+        c += sum(tooth_compliance(beam, pair.roll_angle_rad(w, g), E, G).values())
+    return PairCompliance(pair=pair, beams=beams, g_table_m=g, c_table=c, c_hertz=c_h)

@@ -60,8 +60,9 @@ def software_versions() -> dict:
 
 def build_metadata(sweep) -> dict:
     """The metadata.json content of a sweep (no time stamps: identical for identical sweeps)."""
+    from datagen.class_grid import class_grid
     from datagen.sampling import column_units
-    from datagen.sweep import FORMAT_VERSION, class_grid
+    from datagen.sweep import FORMAT_VERSION
 
     return {"format": "gearpit-dataset", "format_version": FORMAT_VERSION, "name": sweep.name, "seed": sweep.seed,
             "fingerprint": sweep.fingerprint, "software": software_versions(), "config": sweep.source,

@@ -2,7 +2,9 @@
 
 Transverse-plane involute geometry; helical gears through the normal module and
 the helix angle. All lengths in metres, angles in radians inside; the TOML file
-boundary uses millimetres and degrees with the unit in the key name.
+boundary uses millimetres and degrees with the unit in the key name. A pair
+checks its fields when built, then its design (undercut, rim, pointed tip,
+interference, contact ratio) by :func:`datagen.design_checks.check_design`.
 
 References
 ----------
@@ -16,7 +18,8 @@ import math
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 
-from gearpit.errors import DesignError, InputError, require, require_positive, require_range
+from datagen.design_checks import check_design
+from gearpit.errors import InputError, require, require_positive, require_range
 
 
 def inv(a: float) -> float:
@@ -133,7 +136,7 @@ class GearPair:
         require_range("helix_angle_rad", self.helix_angle_rad, 0.0, math.radians(45))
         require_range("addendum_coef", self.addendum_coef, 0.5, 1.5)
         require_range("dedendum_coef", self.dedendum_coef, self.addendum_coef, 2.0, lo_open=True)
-        self._check_design()
+        check_design(self)
 
     # ------------------------------------------------------------------ transverse basics
     @property
@@ -307,50 +310,6 @@ class GearPair:
         r = self.pitch_radius_m(which)
         return self.mass_kg(which) * (r**2 + g.bore_radius_m**2) / 2.0
 
-    # ------------------------------------------------------------------ validation
-    def _check_design(self) -> None:
-        mn = self.module_n_m
-        for which in ("pinion", "wheel"):
-            g = self._gear(which)
-            # undercut: rack addendum line above the interference point (ISO 21771, Niemann 21.4)
-            limit = self.pitch_radius_m(which) * math.sin(self.pressure_angle_t_rad) ** 2 / mn
-            needed = self.addendum_coef - g.profile_shift
-            if needed > limit + 1e-9:
-                z_min = math.ceil(2 * needed * math.cos(self.helix_angle_rad) / math.sin(self.pressure_angle_t_rad) ** 2)
-                raise DesignError(
-                    f"{which}.teeth: {g.teeth} teeth with profile shift {g.profile_shift} are undercut "
-                    f"(needs h_a* - x <= {limit:.3f}); allowed: >= {z_min} teeth or a larger profile shift")
-            if g.bore_radius_m >= self.root_radius_m(which) - mn:
-                raise DesignError(
-                    f"{which}.bore_radius_m: {g.bore_radius_m} m leaves no rim; allowed: < "
-                    f"{self.root_radius_m(which) - mn:.6g} m (root radius minus one module)")
-            sa = self.tooth_thickness_at_m(which, self.tip_radius_m(which))
-            if sa < 0.2 * self.module_t_m:
-                raise DesignError(
-                    f"{which}.profile_shift: tip thickness {sa * 1e3:.3f} mm (pointed tip); allowed: >= 0.2 m_t = "
-                    f"{0.2 * self.module_t_m * 1e3:.3f} mm (reduce the profile shift or the addendum)")
-        # interference: each tip must engage the mate's involute, not below its base circle
-        if self.contact_start_m <= 0:
-            raise DesignError(
-                f"wheel.tip: the wheel tip reaches below the pinion base circle (contact start {self.contact_start_m * 1e3:.3f} mm "
-                "from T1): involute interference; allowed: contact start > 0 (more pinion teeth, positive pinion shift)")
-        if self.contact_end_m >= self.line_of_action_length_m:
-            raise DesignError(
-                "pinion.tip: the pinion tip reaches below the wheel base circle: involute interference; "
-                "allowed: a shorter pinion addendum or more wheel teeth")
-        for which in ("pinion", "wheel"):
-            t0, _ = self.active_roll_range_rad(which)
-            r_sap = self.base_radius_m(which) * math.sqrt(1 + t0 * t0)
-            r_f = self.root_radius_m(which)
-            if r_sap <= r_f:
-                raise DesignError(f"{which}: start of active profile {r_sap * 1e3:.3f} mm lies below the root circle "
-                                  f"{r_f * 1e3:.3f} mm (interference with the fillet); allowed: above the root circle")
-        if self.contact_ratio_transverse < 1.0 and self.contact_ratio_total < 1.0:
-            raise DesignError(f"contact ratio: eps_alpha + eps_beta = {self.contact_ratio_total:.3f}; allowed: >= 1 "
-                              "(the pair would lose contact between teeth)")
-        if self.contact_ratio_transverse < 1.0 and not self.is_helical:
-            raise DesignError(f"contact_ratio_transverse: {self.contact_ratio_transverse:.3f}; allowed: >= 1 for spur gears")
-
     # ------------------------------------------------------------------ summary and IO
     def summary(self) -> dict:
         """Derived quantities as a flat dict (SI units, names carry the unit)."""
@@ -378,7 +337,7 @@ class GearPair:
         return out
 
     def to_dict(self) -> dict:
-        """The TOML/JSON form (mm, deg, GPa at the boundary) that :func:`pair_from_dict` reads."""
+        """The TOML/JSON form (mm, deg, GPa at the boundary) that :func:`datagen.pair_file.pair_from_dict` reads."""
         def gear(g: Gear) -> dict:
             return {"teeth": g.teeth, "face_width_mm": g.face_width_m * 1e3, "profile_shift": g.profile_shift,
                     "bore_radius_mm": g.bore_radius_m * 1e3}
@@ -443,8 +402,6 @@ def with_helix(pair: GearPair, helix_angle_rad: float) -> GearPair:
     return replace(pair, helix_angle_rad=helix_angle_rad, name=f"{pair.name}-beta{math.degrees(helix_angle_rad):g}")
 
 
-from datagen.pair_file import load_pair, pair_from_dict  # noqa: E402  (TOML boundary; imported last: needs the classes)
-
 __all__ = [
-    "Material", "Gear", "GearPair", "pair_from_dict", "load_pair", "preset", "PRESETS",
+    "Material", "Gear", "GearPair", "preset", "PRESETS",
     "spur_pair_example", "helical_pair_example", "with_helix", "inv", "inv_inverse"]

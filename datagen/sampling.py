@@ -1,7 +1,7 @@
 """Sample ``i`` of a sweep: its class, labels and every drawn parameter, from ``(sweep, i)`` alone.
 
 Class assignment is deterministic and interleaved: sample ``i`` belongs to
-class ``i % n_classes`` of :func:`datagen.sweep.class_grid`, so every class
+class ``i % n_classes`` of :func:`datagen.class_grid.class_grid`, so every class
 holds exactly ``samples_per_class`` samples and every shard mixes classes.
 Everything random comes from independent streams of
 ``SeedSequence(sweep.seed, spawn_key=(i, stream))`` (one per group of
@@ -22,9 +22,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from datagen.class_grid import HEALTHY_SHAPE, ClassKey, class_grid
 from datagen.flank import PitMap
 from datagen.pits import make_pit_map
-from datagen.sweep import HEALTHY_SHAPE, ClassKey, Sweep, class_grid
+from datagen.sweep import Sweep
 
 #: spawn-key streams of one sample
 STREAM_OPERATING, STREAM_PITS, STREAM_DRIVE_TRAIN, STREAM_SIMULATION, STREAM_EFFECTS, STREAM_REFERENCE = range(6)
@@ -46,7 +47,7 @@ class SampleSpec:
     ----------
     index : int
     class_index : int
-        Position in :func:`datagen.sweep.class_grid`.
+        Position in :func:`datagen.class_grid.class_grid`.
     key : ClassKey
         Pair, severity class, teeth class and shape.
     severity_class_index, teeth_class_index : int

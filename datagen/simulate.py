@@ -11,7 +11,7 @@ Case file (TOML; units in key names, unknown keys are errors)::
     duration_s = 1.0
     fs_hz = 20000.0
     seed = 7
-    [pair]                       # datagen.geometry.pair_from_dict: preset = "spur-gds" or full keys
+    [pair]                       # datagen.pair_file.pair_from_dict: preset = "spur-gds" or full keys
     preset = "spur-gds"
     [operating]
     speed_rpm = 1500.0           # pinion speed
@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Sequence
 
@@ -42,11 +42,12 @@ import numpy as np
 from datagen import dynamics
 from datagen.effects import EffectContext, build_effects
 from datagen.flank import PitMap
-from datagen.geometry import GearPair, pair_from_dict
+from datagen.geometry import GearPair
+from datagen.pair_file import pair_from_dict
 from datagen.lumped_model import DriveTrain, build_model
 from datagen.mesh_excitation import mesh_record
 from gearpit import __version__
-from gearpit.errors import InputError, require, require_positive, require_range
+from gearpit.errors import require, require_positive, require_range
 from gearpit.tomlio import check_keys, read_toml
 
 #: passband edge of the output anti-alias filter as a fraction of fs (datagen.decimation.PASS_EDGE)
@@ -167,7 +168,7 @@ class Case:
     # ------------------------------------------------------------------ file boundary
     @classmethod
     def from_dict(cls, d: dict) -> "Case":
-        """From the TOML form (module docstring); unknown keys raise :class:`InputError`."""
+        """From the TOML form (module docstring); unknown keys raise :class:`gearpit.errors.InputError`."""
         require(isinstance(d, dict), "case", d, "a table")
         check_keys(d, _CASE_KEYS, "", required={"pair", "operating"})
         pair = pair_from_dict(d["pair"])

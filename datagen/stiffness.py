@@ -15,14 +15,11 @@ Method (PHYSICS.md sections 2-3):
   ``m`` (pinion tooth ``m % z1``, wheel tooth ``m % z2``) enters contact at
   ``x = m``; its slice at ``w`` is at ``g = A + (x - m) p_bt - w tan(beta_b)``
   and in contact while ``A <= g <= E``.
-- Pits (``pit_model="no_contact"``, default): a pitted pixel on the contact line
-  carries no load (a 0.1-0.2 mm deep pit does not close under load), so that
-  slice of that pair drops out while it is there; in addition the material the
-  pits remove lowers the section (area, second moment) of that slice for every
-  load point above them (Ma et al. 2015; Chen & Shao 2011).
-  ``pit_model="weak_spring"`` follows the spur paper literally: a pitted pixel
-  stays a spring whose compliance omits the Hertzian term (its "weak spring"),
-  with the same section loss.
+- Pits: the slices of the pitted engagements take their stiffness from
+  :mod:`datagen.pit_stiffness` (``pit_model="no_contact"``, default: a pitted
+  pixel on the contact line carries no load, and the removed material lowers
+  the section above it; ``"weak_spring"``: the spur paper's weak spring). The
+  record keeps them as overrides of the healthy cycle.
 - The fillet-foundation term of each tooth is taken independently per pair
   (no Chen & Shao multi-pair correction); no coupling between slices.
 
@@ -30,11 +27,8 @@ References
 ----------
 Wan, Z., Cao, H., Zi, Y., He, W., He, Z. (2014). An improved time-varying mesh stiffness algorithm and
     dynamic modeling of gear-rotor system with tooth root crack. Eng. Fail. Anal. 42, 157-177.
-Ma, H., Li, Z., Feng, M., Feng, R., Wen, B. (2015). Time-varying mesh stiffness calculation of spur gear
-    pairs considering tooth spalling. Eng. Fail. Anal. 66, 166-176.
 Chen, Z., Shao, Y. (2011). Dynamic simulation of spur gear with tooth root crack propagating along tooth
     width and crack depth. Eng. Fail. Anal. 18, 2149-2164.
-The spur paper: ../shared/seeds/000_3879ffd8da6fd0be.txt (pixel / weak-spring model).
 """
 from __future__ import annotations
 
@@ -44,43 +38,9 @@ from functools import cached_property
 
 import numpy as np
 
-from datagen.compliance import ToothBeam, beam_compliance, hertz_compliance, tooth_beam, tooth_compliance
-from datagen.flank import PitMap
-from gearpit.errors import InputError, require
-
-PIT_MODELS = ("no_contact", "weak_spring")
-
-#: points of the healthy compliance table along the line of action
-_TABLE_POINTS = 4097
-#: a pit may remove at most this fraction of the section thickness (keeps 1/I finite)
-_MAX_THICKNESS_LOSS = 0.9
-
-
-@dataclass(frozen=True, eq=False)
-class PairCompliance:
-    """Healthy tooth-pair compliance per unit face width as a function of ``g`` (m/N * m)."""
-
-    pair: object
-    beams: dict
-    g_table_m: np.ndarray
-    c_table: np.ndarray
-    c_hertz: float
-
-    def __call__(self, g_m):
-        return np.interp(g_m, self.g_table_m, self.c_table)
-
-
-def pair_compliance(pair) -> PairCompliance:
-    """Tabulate the healthy pair compliance per unit width over the path of contact."""
-    E, nu = pair.material.youngs_modulus_pa, pair.material.poisson
-    G = pair.material.shear_modulus_pa
-    beams = {w: tooth_beam(pair, w) for w in ("pinion", "wheel")}
-    g = np.linspace(pair.contact_start_m, pair.contact_end_m, _TABLE_POINTS)
-    c_h = hertz_compliance(E, nu)
-    c = np.full_like(g, c_h)
-    for w, beam in beams.items():
-        c += sum(tooth_compliance(beam, pair.roll_angle_rad(w, g), E, G).values())
-    return PairCompliance(pair=pair, beams=beams, g_table_m=g, c_table=c, c_hertz=c_h)
+from datagen.compliance import pair_compliance
+from datagen.pit_stiffness import PIT_MODELS, normalise_pits, pit_overrides
+from gearpit.errors import require
 
 
 @dataclass(frozen=True, eq=False)
@@ -245,7 +205,7 @@ class MeshStiffness:
         }
 
 
-def _slices(pair, n_slices: int):
+def face_slices(pair, n_slices: int):
     """Width ``dw`` of a face-width slice, slice centres ``w`` and their shift along the line of action
     ``w tan(beta_b)`` (helical stagger)."""
     dw = pair.contact_face_width_m / n_slices
@@ -253,31 +213,11 @@ def _slices(pair, n_slices: int):
     return dw, w, w * math.tan(pair.base_helix_angle_rad)
 
 
-def _slot_positions(pair, u, slots, shift):
+def slot_positions(pair, u, slots, shift):
     """Nominal contact position ``g`` (m from T1), shape ``(len(u), len(slots), len(shift))``, of the pair in
     each slot at cycle fractions ``u``: ``A + (u + slot) p_bt - shift``."""
     return (pair.contact_start_m + (u[:, None, None] + np.asarray(slots)[None, :, None]) * pair.base_pitch_m
             - shift[None, None, :])
-
-
-def _normalise_pits(pair, pits) -> tuple[PitMap, ...]:
-    if pits is None:
-        return ()
-    maps = (pits,) if isinstance(pits, PitMap) else tuple(pits)
-    seen = set()
-    for pm in maps:
-        require(isinstance(pm, PitMap), "pits", type(pm).__name__, "a PitMap or a sequence of PitMaps")
-        require(pm.gear not in seen, "pits.gear", pm.gear, "at most one pit map per gear")
-        seen.add(pm.gear)
-        expected = pair.flank_grid(pm.gear, pm.grid.n_profile, pm.grid.n_face)
-        for name in ("profile_length_m", "face_width_m"):
-            got, want = getattr(pm.grid, name), getattr(expected, name)
-            if not math.isclose(got, want, rel_tol=1e-6):
-                raise InputError(f"pits.grid.{name}", got, f"{want:.6g} (the {pm.gear} flank of pair {pair.name})")
-        z = pair._gear(pm.gear).teeth
-        for t in pm.depth_m:
-            require(t < z, "pits.tooth", t, f"a tooth index in [0, {z - 1}] of the {pm.gear}")
-    return maps
 
 
 def mesh_stiffness(pair, *, pits=None, positions_per_cycle: int = 64, n_slices: int | None = None,
@@ -312,7 +252,7 @@ def mesh_stiffness(pair, *, pits=None, positions_per_cycle: int = 64, n_slices: 
     require(pit_model in PIT_MODELS, "pit_model", pit_model, f"one of: {', '.join(PIT_MODELS)}")
     require(isinstance(positions_per_cycle, int) and 4 <= positions_per_cycle <= 100000, "positions_per_cycle",
             positions_per_cycle, "an integer in [4, 100000]")
-    maps = _normalise_pits(pair, pits)
+    maps = normalise_pits(pair, pits)
     if n_slices is None:
         cols = [pm.grid.n_face for pm in maps if pm.pitted_teeth]
         n_slices = max(cols) if cols else (100 if pair.is_helical else 1)
@@ -322,15 +262,15 @@ def mesh_stiffness(pair, *, pits=None, positions_per_cycle: int = 64, n_slices: 
     P = {frozenset(): z1, frozenset({"pinion"}): z1, frozenset({"wheel"}): z2}.get(frozenset(gears), math.lcm(z1, z2))
     pc = pair_compliance(pair)
     A, E_end, pb = pair.contact_start_m, pair.contact_end_m, pair.base_pitch_m
-    dw, w, shift = _slices(pair, n_slices)
+    dw, w, shift = face_slices(pair, n_slices)
     n_slots = int(math.floor(pair.contact_ratio_total)) + 2
     u = np.arange(positions_per_cycle) / positions_per_cycle
-    g = _slot_positions(pair, u, np.arange(n_slots), shift)
+    g = slot_positions(pair, u, np.arange(n_slots), shift)
     eps = 1e-12 * pb
     in_contact = (g >= A - eps) & (g <= E_end + eps)
     g = np.where(in_contact, g, np.nan)
     k_cycle = np.where(in_contact, dw / pc(np.nan_to_num(g, nan=A)), 0.0)
-    overrides = _pit_overrides(pair, pc, maps, P, g, dw, w, pit_model)
+    overrides = pit_overrides(pair, pc, maps, P, g, dw, w, pit_model)
     k_slots = np.tile(k_cycle.sum(axis=2), (P, 1))
     n_pos = P * positions_per_cycle
     cyc = np.arange(n_pos) // positions_per_cycle
@@ -343,119 +283,3 @@ def mesh_stiffness(pair, *, pits=None, positions_per_cycle: int = 64, n_slices: 
                          pit_model=pit_model, pits=maps, x_cycles=np.arange(n_pos) / positions_per_cycle,
                          k_n_per_m=k_slots.sum(axis=1), k_slots_n_per_m=k_slots, engagement=engagement,
                          _g_cycle=g, _k_cycle=k_cycle, _overrides=overrides)
-
-
-@dataclass(frozen=True, eq=False)
-class _PitGeometry:
-    """Per pitted tooth: cumulative section loss (rows+1, cols) and the pixel mask."""
-
-    depth: np.ndarray
-    dW: np.ndarray   # (3, rows+1, cols)
-    dA0: np.ndarray  # (rows+1, cols)
-
-
-def _section_loss(pair, beam: ToothBeam, which: str, depth: np.ndarray, grid) -> _PitGeometry:
-    """Cumulative W_n, A_0 increments that the pits of one tooth cause, row by row from the SAP up."""
-    rb = beam.base_radius_m
-    t_sap, _ = pair.active_roll_range_rad(which)
-    s_edges = np.arange(grid.n_profile + 1) * grid.ds_m
-    t_edges = np.sqrt(t_sap**2 + 2.0 * s_edges / rb)
-    a = beam.alpha2_rad - t_edges
-    y_edges = rb * (np.cos(a) - t_edges * np.sin(a)) - beam.y_root_m
-    t_mid = 0.5 * (t_edges[1:] + t_edges[:-1])
-    a_mid = beam.alpha2_rad - t_mid
-    z_mid = rb * (np.cos(a_mid) - t_mid * np.sin(a_mid)) - beam.y_root_m
-    thick = 2.0 * rb * (t_mid * np.cos(a_mid) + np.sin(a_mid))
-    dy = np.diff(y_edges)
-    loss = np.minimum(depth, _MAX_THICKNESS_LOSS * thick[:, None])
-    t_pit = thick[:, None] - loss
-    d_inv_i = 12.0 / t_pit**3 - 12.0 / thick[:, None] ** 3
-    d_inv_a = 1.0 / t_pit - 1.0 / thick[:, None]
-    dW = np.zeros((3, grid.n_profile + 1, grid.n_face))
-    for n in range(3):
-        dW[n, 1:] = np.cumsum(d_inv_i * (z_mid**n * dy)[:, None], axis=0)
-    dA0 = np.zeros((grid.n_profile + 1, grid.n_face))
-    dA0[1:] = np.cumsum(d_inv_a * dy[:, None], axis=0)
-    return _PitGeometry(depth=depth, dW=dW, dA0=dA0)
-
-
-def _pit_overrides(pair, pc: PairCompliance, maps, P: int, g_cycle, dw: float, w_slices, pit_model: str) -> dict:
-    """Slice stiffness of every pitted engagement, keyed by (engagement m, slot)."""
-    if not any(pm.pitted_teeth for pm in maps):
-        return {}
-    E, G = pair.material.youngs_modulus_pa, pair.material.shear_modulus_pa
-    b_c = pair.contact_face_width_m
-    per_gear = {}
-    for pm in maps:
-        if not pm.pitted_teeth:
-            continue
-        beam = pc.beams[pm.gear]
-        offset = (pair._gear(pm.gear).face_width_m - b_c) / 2.0
-        cols = np.clip(((w_slices + offset) / pm.grid.dw_m).astype(np.int64), 0, pm.grid.n_face - 1)
-        geo = {t: _section_loss(pair, beam, pm.gear, pm.depth_m[t], pm.grid) for t in pm.pitted_teeth}
-        per_gear[pm.gear] = (pm, beam, cols, geo)
-    z = {"pinion": pair.pinion.teeth, "wheel": pair.wheel.teeth}
-    engaged = sorted({m for gear, (pm, *_rest) in per_gear.items() for m in range(P) if m % z[gear] in pm.pitted_teeth})
-    n_slots = g_cycle.shape[1]
-    out = {}
-    for m in engaged:
-        for s in range(n_slots):
-            g = g_cycle[:, s, :]
-            contact = ~np.isnan(g)
-            if not contact.any():
-                continue
-            g0 = np.where(contact, g, pair.contact_start_m)
-            comp = pc(g0)
-            pitted_here = np.zeros(g.shape, bool)
-            for gear, (pm, beam, cols, geo) in per_gear.items():
-                tooth = m % z[gear]
-                if tooth not in geo:
-                    continue
-                pg = geo[tooth]
-                t_sap, _ = pair.active_roll_range_rad(gear)
-                roll = pair.roll_angle_rad(gear, g0)
-                s_arc = beam.base_radius_m * (roll**2 - t_sap**2) / 2.0
-                rows = np.clip((s_arc / pm.grid.ds_m).astype(np.int64), 0, pm.grid.n_profile - 1)
-                colg = np.broadcast_to(cols[None, :], rows.shape)
-                pitted_here |= pg.depth[rows, colg] > 0
-                a1, Y, h = beam.load_point(roll)
-                W = pg.dW[:, rows, colg]
-                b, sh, ax = beam_compliance(a1, Y, h, W, pg.dA0[rows, colg], E, G)
-                comp = comp + b + sh + ax
-            if pit_model == "no_contact":
-                k = np.where(contact & ~pitted_here, dw / comp, 0.0)
-            else:
-                comp = np.where(pitted_here, comp - pc.c_hertz, comp)
-                k = np.where(contact, dw / comp, 0.0)
-            out[(m, s)] = k
-    return out
-
-
-def pixel_stiffness_map(pair, pit_map: PitMap, tooth: int, *, pit_model: str = "no_contact") -> np.ndarray:
-    """Stiffness of each flank pixel while it is on the contact line (N/m per pixel column).
-
-    The spur paper's "stiffness distribution" picture (its Figs 11-12): row
-    ``i`` at its contact position, column ``j`` as a slice of the pixel's width.
-    """
-    require(pit_model in PIT_MODELS, "pit_model", pit_model, f"one of: {', '.join(PIT_MODELS)}")
-    grid = pit_map.grid
-    pc = pair_compliance(pair)
-    beam = pc.beams[pit_map.gear]
-    t_sap, _ = pair.active_roll_range_rad(pit_map.gear)
-    roll = np.sqrt(t_sap**2 + 2.0 * grid.s_centres_m / beam.base_radius_m)
-    if pit_map.gear == "pinion":
-        g = roll * beam.base_radius_m
-    else:
-        g = pair.line_of_action_length_m - roll * beam.base_radius_m
-    comp = np.repeat(pc(g)[:, None], grid.n_face, axis=1)
-    depth = pit_map.depth_m.get(tooth, np.zeros(grid.shape))
-    pg = _section_loss(pair, beam, pit_map.gear, depth, grid)
-    a1, Y, h = beam.load_point(roll)
-    rows = np.arange(grid.n_profile)
-    b, sh, ax = beam_compliance(a1[:, None], Y[:, None], h[:, None], pg.dW[:, rows, :], pg.dA0[rows, :],
-                                pair.material.youngs_modulus_pa, pair.material.shear_modulus_pa)
-    comp = comp + b + sh + ax
-    pitted = depth > 0
-    if pit_model == "no_contact":
-        return np.where(pitted, 0.0, grid.dw_m / comp)
-    return grid.dw_m / np.where(pitted, comp - pc.c_hertz, comp)

@@ -1,10 +1,10 @@
 """Dataset sweep configuration: what to generate, read from TOML and checked before any work.
 
 A sweep is the cross product of gear pairs x severity bins x pitted-teeth
-classes x pit shape families (the *class grid*, :func:`class_grid`), with
-``samples_per_class`` samples in every class, and per-sample ranges for the
-operating point, the pit details and the nuisance physics (effects and drive
-train). Every range is drawn per sample by :mod:`datagen.sampling`.
+classes x pit shape families (the *class grid*, :mod:`datagen.class_grid`),
+with ``samples_per_class`` samples in every class, and per-sample ranges for
+the operating point, the pit details and the nuisance physics (effects and
+drive train). Every range is drawn per sample by :mod:`datagen.sampling`.
 
 TOML layout (units in key names; every table and key is checked, unknown keys
 are errors)::
@@ -77,8 +77,10 @@ from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from pathlib import Path
 
+from datagen.class_grid import SeverityBin, TeethClass, class_grid, read_severity_bins, read_teeth_classes
 from datagen.draws import Draw, is_int, read_draw, read_int, read_names, read_number
-from datagen.geometry import GearPair, pair_from_dict, preset
+from datagen.geometry import GearPair, preset
+from datagen.pair_file import pair_from_dict
 from datagen.lumped_model import DriveTrain
 from datagen.pits import DEPTH_PROFILES, SHAPES, default_tolerance, max_severity
 from gearpit.errors import require
@@ -100,48 +102,6 @@ CHANNELS = ("acc_pinion_loa_m_s2", "acc_wheel_loa_m_s2", "force_bearing_pinion_l
             "acc_pinion_axial_m_s2", "acc_wheel_axial_m_s2", "force_bearing_pinion_axial_n",
             "force_bearing_wheel_axial_n", "dte_m", "mesh_force_n", "speed_pinion_rpm", "speed_wheel_rpm",
             "tacho_pinion", "tacho_wheel")
-HEALTHY_SHAPE = "none"
-
-
-@dataclass(frozen=True)
-class SeverityBin:
-    """A named severity class: pitted flank fraction in ``[min_fraction, max_fraction)``; ``[0, 0]`` = healthy."""
-
-    name: str
-    min_fraction: float
-    max_fraction: float
-
-    @property
-    def healthy(self) -> bool:
-        return self.max_fraction == 0.0
-
-    def contains(self, severity: float) -> bool:
-        if self.healthy:
-            return severity == 0.0
-        return self.min_fraction <= severity < self.max_fraction
-
-
-@dataclass(frozen=True)
-class TeethClass:
-    """Number of pitted teeth: ``"k"`` (exactly k) or ``"k+"`` (k .. max_pitted_teeth)."""
-
-    name: str
-    low: int
-    high: int
-
-
-@dataclass(frozen=True)
-class ClassKey:
-    """One cell of the class grid."""
-
-    pair: str
-    severity_class: str
-    teeth_class: str
-    shape: str
-
-    @property
-    def label(self) -> str:
-        return f"{self.pair}/{self.severity_class}/{self.teeth_class}/{self.shape}"
 
 
 @dataclass(frozen=True)
@@ -206,22 +166,6 @@ class Sweep:
         return hashlib.sha256(text.encode()).hexdigest()
 
 
-def class_grid(sweep: Sweep) -> list[ClassKey]:
-    """All classes, in a fixed order: per pair, the healthy class first, then bin x teeth x shape."""
-    out = []
-    for pair in sweep.pairs:
-        for b in sweep.severity_bins:
-            if b.healthy:
-                out.append(ClassKey(pair.name, b.name, "0", HEALTHY_SHAPE))
-                continue
-            for tc in sweep.teeth_classes:
-                if tc.high == 0:
-                    continue
-                for shape in sweep.shapes:
-                    out.append(ClassKey(pair.name, b.name, tc.name, shape))
-    return out
-
-
 # ---------------------------------------------------------------------- reading
 def load_sweep(path: str | Path) -> Sweep:
     """Read and validate a sweep TOML file (raises :class:`InputError` on anything wrong)."""
@@ -247,7 +191,7 @@ def sweep_from_dict(doc: Mapping) -> Sweep:
 
     cl = _table(doc, "classes")
     check_keys(cl, _CLASSES, "classes", required={"severity_bins"})
-    bins = _bins(cl["severity_bins"])
+    bins = read_severity_bins(cl["severity_bins"])
     has_healthy = any(b.healthy for b in bins)
     has_pitted = any(not b.healthy for b in bins)
     shapes = read_names(cl.get("shapes", ["ellipse"]), "classes.shapes", SHAPES) if has_pitted else ()
@@ -256,7 +200,7 @@ def sweep_from_dict(doc: Mapping) -> Sweep:
     gear = pits.get("gear", "pinion")
     require(gear in ("pinion", "wheel"), "pits.gear", gear, "one of: pinion, wheel")
     z_min = min(p._gear(gear).teeth for p in pairs)
-    teeth = _teeth_classes(cl, has_healthy, has_pitted, z_min)
+    teeth = read_teeth_classes(cl, has_healthy, has_pitted, z_min)
 
     grid_px = pits.get("grid_px", [73, 200])
     require(isinstance(grid_px, list) and len(grid_px) == 2 and all(is_int(v) and 8 <= v <= 4000 for v in grid_px),
@@ -301,61 +245,6 @@ def _pairs(v) -> tuple[GearPair, ...]:
         out.append(preset(item) if isinstance(item, str) else pair_from_dict(item, where=f"sweep.pairs[{i}]"))
     names = [p.name for p in out]
     require(len(set(names)) == len(names), "sweep.pairs", names, "pairs with distinct names (set name = ...)")
-    return tuple(out)
-
-
-def _bins(table) -> tuple[SeverityBin, ...]:
-    allowed = "a table name = [min_fraction, max_fraction] with 0 < min < max <= 1 (or [0, 0] for healthy)"
-    require(isinstance(table, Mapping) and len(table) > 0, "classes.severity_bins", table, allowed)
-    bins = []
-    for name, edges in table.items():
-        field = f"classes.severity_bins.{name}"
-        ok = isinstance(edges, list) and len(edges) == 2 and all(
-            isinstance(x, (int, float)) and not isinstance(x, bool) and 0 <= x <= 1 for x in edges)
-        require(ok, field, edges, allowed)
-        lo, hi = float(edges[0]), float(edges[1])
-        require((lo == hi == 0.0) or 0 < lo < hi, field, edges,
-                "[0, 0] (healthy) or 0 < min < max: this bin is empty" if lo >= hi else allowed)
-        bins.append(SeverityBin(name, lo, hi))
-    require(sum(b.healthy for b in bins) <= 1, "classes.severity_bins", [b.name for b in bins if b.healthy],
-            "at most one healthy bin [0, 0]")
-    pitted = [b for b in bins if not b.healthy]
-    for a, b in zip(pitted, pitted[1:]):
-        require(b.min_fraction >= a.max_fraction, f"classes.severity_bins.{b.name}",
-                [b.min_fraction, b.max_fraction],
-                f"bins sorted by severity and not overlapping: min >= {a.max_fraction:g} (max of '{a.name}')")
-    return tuple(bins)
-
-
-def _teeth_classes(cl, has_healthy, has_pitted, z_min) -> tuple[TeethClass, ...]:
-    names = cl.get("teeth", ["0", "1"] if has_healthy else ["1"])
-    require(isinstance(names, list) and len(names) > 0 and all(isinstance(n, str) for n in names), "classes.teeth",
-            names, 'a non-empty list of names like "0", "1", "2", "3+"')
-    max_t = cl.get("max_pitted_teeth")
-    if max_t is not None:
-        require(is_int(max_t) and 1 <= max_t <= z_min, "classes.max_pitted_teeth", max_t,
-                f"an integer in [1, {z_min}] (teeth of the pitted gear)")
-    out = []
-    for name in names:
-        m = re.fullmatch(r"(\d+)(\+?)", name)
-        require(m is not None, "classes.teeth", name, 'a count "k" or "k+" (k .. max_pitted_teeth)')
-        low = int(m.group(1))
-        if m.group(2):
-            require(max_t is not None, "classes.max_pitted_teeth", None,
-                    f'a value (needed by the teeth class "{name}")')
-            require(max_t >= low, "classes.max_pitted_teeth", max_t, f'>= {low} (teeth class "{name}" is empty)')
-            high = max_t
-        else:
-            high = low
-        require(high <= z_min, "classes.teeth", name, f"at most {z_min} teeth (the pitted gear's teeth)")
-        out.append(TeethClass(name, low, high))
-    for a, b in zip(out, out[1:]):
-        require(b.low > a.high, "classes.teeth", names, "increasing, non-overlapping counts")
-    has_zero = any(t.high == 0 for t in out)
-    require(has_zero == has_healthy, "classes.teeth", names,
-            'a "0" class exactly when there is a healthy severity bin [0, 0] (else that class is empty)')
-    require(not has_pitted or any(t.low > 0 for t in out), "classes.teeth", names,
-            "at least one class with pitted teeth (the pitted severity bins would be empty)")
     return tuple(out)
 
 

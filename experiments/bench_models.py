@@ -3,7 +3,7 @@
 Run: ``python experiments/bench_models.py`` (the default dataset, ``experiments/models_sweeps/default*.toml``,
 is generated into ``experiments/out/models/data`` first if it is not there: ~5 min).
 
-- training: the CNN with the protocol's configuration (a CNN variant of ``eval_protocol.VARIANTS``,
+- training: the CNN with the protocol's configuration (a CNN variant of ``classifier_runs.VARIANTS``,
   default ``tsa``: representation and side inputs; the default :class:`models.train.TrainConfig`: at
   most 150 epochs, early stopping) on the whole default dataset; target < 5 min on 2 cores;
 - inference: ``CNNClassifier.predict`` (representation + network, 1 and 3 test-time crops) on 1024
@@ -35,9 +35,9 @@ THROUGHPUT_TARGET = 500.0
 
 
 sys.path.insert(0, str(ROOT / "experiments"))
-from eval_protocol import VARIANTS as PROTOCOL_VARIANTS, dataset  # noqa: E402
+from classifier_runs import VARIANTS as PROTOCOL_VARIANTS, dataset  # noqa: E402
 from reference_check import VARIANTS as REFERENCE_VARIANTS  # noqa: E402
-from sensor_protocol import SENSOR_VARIANTS  # noqa: E402
+from sensor_protocol_design import SENSOR_VARIANTS  # noqa: E402
 
 #: CNN variants of both protocols (representation + side inputs)
 VARIANTS = {**PROTOCOL_VARIANTS, **SENSOR_VARIANTS, **REFERENCE_VARIANTS}

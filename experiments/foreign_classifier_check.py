@@ -122,7 +122,7 @@ def main(argv=None) -> int:
                     help="training sweeps (experiments/models_sweeps/NAME.toml + NAME_healthy.toml)")
     ap.add_argument("--no-baselines", action="store_true")
     args = ap.parse_args(argv)
-    from eval_protocol import OUT as DATA_OUT, SEED, baseline_runs, cnn_run, dataset, features, log, strata
+    from classifier_runs import OUT as DATA_OUT, SEED, baseline_runs, cnn_run, dataset, features, log, strata
     from models.baselines import feature_table
     from models.sources import load_measurements, measurement_files
     from models.train import stratified_split

@@ -30,8 +30,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "experiments"))
 
-from eval_protocol import OUT, cnn_run, dataset, log  # noqa: E402
-from sensor_protocol import SENSOR_VARIANTS, second_draw, training_and_test  # noqa: E402
+from classifier_runs import OUT, cnn_run, dataset, log  # noqa: E402
+from sensor_protocol_design import SENSOR_VARIANTS, second_draw, training_and_test  # noqa: E402
 
 WHERE = OUT / "pitch_deviations"
 

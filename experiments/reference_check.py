@@ -54,7 +54,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))
 sys.path.insert(0, str(ROOT / "experiments"))
 
-from models.representations import RepresentationSpec  # noqa: E402
+from models.representation_spec import RepresentationSpec  # noqa: E402
 
 OUT = ROOT / "experiments" / "out" / "models" / "reference"
 TRAIN = "default_pitch_ref"
@@ -129,7 +129,7 @@ def baselines(parts: dict, train_rows: dict, test_rows: dict, foreign, channel: 
     ``parts``: name -> SignalSet (the sweep's draws), each tabulated once (cached under ``OUT / "features"``);
     ``train_rows``: part name -> its training rows; ``test_rows``: test name -> rows of ``parts["draw1"]``;
     ``foreign``: a further test set or None."""
-    from eval_protocol import baseline_runs
+    from classifier_runs import baseline_runs
     from models.baselines import feature_config_for
     from models.data import concat
 
@@ -172,7 +172,7 @@ def main(argv=None) -> int:
                          "record's own columns as the control")
     ap.add_argument("--jobs", type=int, default=2, help="processes for the feature tables (--baselines)")
     args = ap.parse_args(argv)
-    from eval_protocol import OUT as DATA_OUT, SEED, cnn_run, dataset, log, strata
+    from classifier_runs import OUT as DATA_OUT, SEED, cnn_run, dataset, log, strata
     from models.sources import load_measurements, measurement_files
     from models.train import stratified_split
 
@@ -196,7 +196,7 @@ def main(argv=None) -> int:
     train = data.subset(tr)
     if args.more:
         from models.data import concat
-        from sensor_protocol import second_draw, training_and_test
+        from sensor_protocol_design import second_draw, training_and_test
 
         more = second_draw(DATA_OUT / "data", args.channel, base=TRAIN)
         parts["draw2"] = more
@@ -208,8 +208,8 @@ def main(argv=None) -> int:
             tests = {args.split: test}
             train_rows, test_rows = {"draw1": tr1, "draw2": tr2}, {args.split: te1}
     if args.train_seed is not None:       # cnn_run reads the protocol's seed when it trains
-        import eval_protocol
-        eval_protocol.SEED = args.train_seed
+        import classifier_runs
+        classifier_runs.SEED = args.train_seed
     res = {"train": TRAIN + (" + second draw" if args.more else ""), "split": args.split, "n_train": len(train),
            "n_test": {k: len(v) for k, v in tests.items()}, "cnn": {}}
     for variant in args.variants:  # "order", "tsa_op" read the same records without their references

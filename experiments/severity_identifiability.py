@@ -163,7 +163,7 @@ NUISANCES = ("profile_error_grade", "profile_error_phase_rad", "pitch_error_grad
 def _signal_scalars(data):
     """log RMS, log peak and kurtosis of the TSA difference signal (in TSA standard deviations), and the
     log of the record's absolute RMS, for every pitted record of ``data``."""
-    from eval_protocol import REPRESENTATIONS
+    from classifier_runs import REPRESENTATIONS
 
     from models.representations import represent
 
@@ -179,7 +179,7 @@ def _signal_scalars(data):
 
 def signal_level(seed: int = 0) -> dict:
     """Question 3 of the module docstring."""
-    from eval_protocol import OUT as MODELS_OUT, dataset
+    from classifier_runs import OUT as MODELS_OUT, dataset
     from sklearn.ensemble import GradientBoostingClassifier
     from sklearn.model_selection import StratifiedKFold, cross_val_score
 

@@ -12,12 +12,11 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import numpy as np
-
 from datagen.flank import PitMap
 from datagen.geometry import helical_pair_example, spur_pair_example
+from datagen.pit_stiffness import pixel_stiffness_map
 from datagen.pits import PitSpec, ellipse
-from datagen.stiffness import mesh_stiffness, pixel_stiffness_map
+from datagen.stiffness import mesh_stiffness
 from datagen.stiffness_plot import plot_pixel_map, plot_stiffness
 
 

@@ -153,7 +153,7 @@ def main(argv=None) -> int:
                     help="the sensor protocol's splits (speed / load: train below 1200 rpm / 50 N m, test at or above)")
     args = ap.parse_args(argv)
     assert 0.0 < args.fraction < 1.0, "--fraction must lie in (0, 1)"
-    from eval_protocol import SEED, strata
+    from classifier_runs import SEED, strata
     from models.sources import load_dataset
     from models.data import concat
     from models.train import stratified_split
@@ -185,7 +185,7 @@ def main(argv=None) -> int:
         tr, te = stratified_split(strata(draw1), 0.3, SEED)
         tr2 = np.arange(len(draw2))
     else:
-        from sensor_protocol import draw_training_rows, splits
+        from sensor_protocol_design import draw_training_rows, splits
 
         tr, te, _ = splits(draw1, inner=True)[args.split]
         tr2 = draw_training_rows(args.split, draw2)

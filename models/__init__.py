@@ -7,6 +7,7 @@
 - ``unknown_rate``    records whose sampling rate is unknown (the SpectraQuest CSVs): mesh-frequency estimate
 - ``toy``             a small labelled toy signal set for tests, benchmarks and examples
 - ``representations`` network inputs: raw segment, envelope spectrum, TSA, order and mesh-order spectra
+- ``representation_spec`` which representation and its size (:class:`RepresentationSpec`, checked when built)
 - ``tsa``             the TSA and its difference signal (comb of shaft orders, filters, direct DFT of kept orders)
 - ``segments``        per-record normalisation and segment starts, shared by ``representations`` and ``tsa``
 - ``input_checks``    whether records can be represented (speed, tooth counts, segment length, Nyquist)

@@ -11,7 +11,7 @@ import numpy as np
 from gearpit.errors import require, require_positive
 
 if TYPE_CHECKING:
-    from models.representations import RepresentationSpec
+    from models.representation_spec import RepresentationSpec
 
 
 def check_inputs(spec: RepresentationSpec, n_samples: int, fs_hz: float, shaft_hz=None, mesh_cps=None,

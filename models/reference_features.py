@@ -36,7 +36,7 @@ import numpy as np
 
 from features.statistics import crest_factor, kurtosis, rms
 from gearpit.errors import require
-from models.representations import RepresentationSpec
+from models.representation_spec import RepresentationSpec
 from models.tooth_profile import FEATURE_NAMES as PROFILE_NAMES, profile_of_difference
 from models.tsa import residual_difference, tsa_difference
 

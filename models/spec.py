@@ -21,8 +21,9 @@ import pandas as pd
 
 from gearpit.errors import InputError, require
 from models.data import PairInfo, SignalSet
+from models.input_checks import check_inputs
 from models.operating import NEEDS_SPEED
-from models.representations import FS_BOUND, RepresentationSpec, check_inputs
+from models.representation_spec import FS_BOUND, RepresentationSpec
 
 FORMAT = "gearpit-model"
 FORMAT_VERSION = 1
@@ -47,7 +48,7 @@ class ModelSpec:
         Length of the training records (samples).
     pair : PairInfo
     representation : dict
-        :class:`~models.representations.RepresentationSpec` fields (CNN) or
+        :class:`~models.representation_spec.RepresentationSpec` fields (CNN) or
         :class:`features.table.FeatureConfig` fields (feature baselines).
     severity_classes, teeth_classes : list of str
     severity_scale : float

@@ -43,7 +43,8 @@ from __future__ import annotations
 import numpy as np
 
 from gearpit.errors import require
-from models.representations import RepresentationSpec, represent
+from models.representation_spec import RepresentationSpec
+from models.representations import represent
 
 #: low-pass of the difference signal (mesh orders): the cut-off of the sensor protocol's ``tsa_lp_load`` CNN,
 #: chosen there on an inner speed split (experiments/sensor_protocol.py); not re-chosen here

@@ -39,8 +39,10 @@ from gearpit.errors import InputError, require, require_positive, require_range
 from models.augment import AugmentConfig, augment_batch
 from models.classifier import CNNClassifier, build_network
 from models.data import TEETH_CLASSES, SignalSet
+from models.input_checks import check_inputs
 from models.operating import check_columns, fit_operating, operating_features
-from models.representations import RepresentationSpec, check_inputs, represent
+from models.representation_spec import RepresentationSpec
+from models.representations import represent
 from models.spec import TASKS, ModelSpec, training_ranges
 
 MAX_THREADS = 2

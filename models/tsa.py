@@ -21,7 +21,7 @@ from models.order_filters import (dft_at, highpass, lines_dft_at, lowpass_gain, 
 from models.segments import _normalise, _per_record, _split_pair, _starts
 
 if TYPE_CHECKING:
-    from models.representations import RepresentationSpec
+    from models.representation_spec import RepresentationSpec
 
 
 def _difference_mask(n_orders: int, z_pinion: int) -> np.ndarray:

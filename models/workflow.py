@@ -14,7 +14,7 @@ from pathlib import Path
 
 from gearpit.errors import require
 from models.io import save_model
-from models.representations import RepresentationSpec
+from models.representation_spec import RepresentationSpec
 from models.sources import load_dataset
 from models.train import TrainConfig, stratified_split, train_cnn
 

@@ -69,7 +69,7 @@ def test_contact_pattern_matches_vector_geometry(dx, dy):
 def _mean_pairs(ms, pair, dx: float, dy: float) -> float:
     """Mean number of pairs in contact over a cycle: each pair's stiffness over the healthy stiffness at its
     contact position (from the vector construction) is its contact fraction."""
-    from datagen.stiffness import pair_compliance
+    from datagen.compliance import pair_compliance
 
     ppc = ms.positions_per_cycle
     k = ms.slots_at_centre_offset(np.full(ppc, dx), np.full(ppc, dy))

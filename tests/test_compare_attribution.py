@@ -353,7 +353,6 @@ def test_nothing_is_claimed_against_a_baseline_that_agrees_within_the_noise():
     from compare.error import VIEWS
 
     noise = {v: 0.8 for v in VIEWS}
-    base = {v: 0.03 for v in VIEWS}
 
     def cand(name, total, baseline, noise_view_db):
         return CandidateResult(name, "", {}, {}, total, baseline, {v: total for v in VIEWS}, "2 s", 1,

@@ -7,9 +7,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from datagen.class_grid import class_grid
 from datagen.pits import max_severity
 from datagen.sampling import build_pit_map, draw_sample, sample_row
-from datagen.sweep import class_grid, load_sweep, sweep_from_dict
+from datagen.sweep import load_sweep, sweep_from_dict
 from gearpit.errors import InputError
 
 REPO = Path(__file__).resolve().parents[1]

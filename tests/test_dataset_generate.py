@@ -225,7 +225,7 @@ def test_second_channel_leaves_the_accelerometer_records_unchanged(reference, tm
 
 
 def test_encoder_errors_change_only_the_transmission_error_by_their_shaft_lines(reference, tmp_path):
-    """The cross-physics draw of the sensor protocol (experiments/sensor_protocol.py, ENCODERS): adding
+    """The cross-physics draw of the sensor protocol (experiments/sensor_protocol_design.py, ENCODERS): adding
     [effects.shaft_encoder_error] leaves the accelerometer bytes unchanged (each effect draws its parameters from
     its own stream, and effects apply in name order, so noise keeps its position and its draw) and changes the transmission error by exactly
     rb1 a1 sin(theta1 + psi1) - rb2 a2 sin(theta2 + psi2) with the recorded draws (Remond 2000; theta from the

@@ -4,7 +4,8 @@ from dataclasses import replace
 
 import pytest
 
-from datagen.geometry import Gear, GearPair, helical_pair_example, load_pair, pair_from_dict, preset, spur_pair_example
+from datagen.geometry import Gear, GearPair, helical_pair_example, preset, spur_pair_example
+from datagen.pair_file import load_pair, pair_from_dict
 from gearpit.errors import DesignError, InputError
 
 
@@ -81,7 +82,7 @@ def test_non_positive_sizes_refused(field, value):
 def test_toml_round_trip_and_unknown_key(tmp_path):
     """to_dict -> TOML -> load gives the same derived geometry; a typo key is refused by name."""
     p = helical_pair_example()
-    lines = ['[pair]', f'name = "x"', 'preset = "helical-dct"', 'helix_angle_deg = 29.0']
+    lines = ['[pair]', 'name = "x"', 'preset = "helical-dct"', 'helix_angle_deg = 29.0']
     f = tmp_path / "pair.toml"
     f.write_text("\n".join(lines))
     q = load_pair(f)

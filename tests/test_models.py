@@ -12,7 +12,7 @@ from models.cnn import GearCNN, count_parameters
 from models.data import PairInfo, SignalSet
 from models.evaluate import evaluate
 from models.io import load_model, save_model
-from models.representations import RepresentationSpec
+from models.representation_spec import RepresentationSpec
 from models.spec import Predictions
 from models.toy import toy_signal_set
 from models.train import TrainConfig, train_cnn

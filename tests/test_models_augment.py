@@ -11,7 +11,7 @@ from scipy.signal import csd, welch
 from gearpit.errors import InputError
 from models.augment import AugmentConfig, augment_batch, lowpass_filter, mount_transmissibility, path_filter
 from models.io import load_model, save_model
-from models.representations import RepresentationSpec
+from models.representation_spec import RepresentationSpec
 from models.toy import toy_signal_set
 from models.train import TrainConfig, train_cnn
 

@@ -133,7 +133,8 @@ def test_measurement_speed_is_measured_not_taken_from_the_sidecar(workdir, tmp_p
     (correlation > 0.99, against < 0.5 with the sidecar's speed: 1.2 % turns the 29th order by 4.2 cycles over
     12 revolutions); with a tachometer channel the pulses give it; a sidecar 3 % off is not confirmed by a search
     three times as wide, so its speed is kept and the record is warned about; --sidecar-speed takes it as is."""
-    from models.representations import RepresentationSpec, represent
+    from models.representation_spec import RepresentationSpec
+    from models.representations import represent
     from models.sources import load_measurements
 
     test = _toy(11, n=2)
@@ -247,7 +248,7 @@ def test_unknown_rate_csv_records_and_labels(tmp_path):
                                             ("train_te_profile.toml", "tsa_lp_profile")])
 def test_transmission_error_train_config_is_the_protocol_variant(config, variant):
     """experiments/train_te*.toml (README, "Which sensor") are CNN variants of the sensor protocol: the same
-    representation and side inputs as experiments/sensor_protocol.SENSOR_VARIANTS, so the README's command
+    representation and side inputs as experiments/sensor_protocol_design.SENSOR_VARIANTS, so the README's command
     trains what RESULTS.md measured."""
     import sys
     from pathlib import Path
@@ -257,7 +258,7 @@ def test_transmission_error_train_config_is_the_protocol_variant(config, variant
 
     root = Path(__file__).resolve().parents[1]
     sys.path.insert(0, str(root / "experiments"))
-    from sensor_protocol import SENSOR_VARIANTS
+    from sensor_protocol_design import SENSOR_VARIANTS
 
     cfg = TrainConfig.from_dict(read_toml(root / "experiments" / config)["train"])
     rep, side = SENSOR_VARIANTS[variant]

@@ -16,7 +16,8 @@ from scipy.signal import resample
 from gearpit.errors import InputError
 from models.classifier import crop_starts
 from models.operating import operating_features
-from models.representations import LOG_FLOOR, RepresentationSpec, represent, represent_crops
+from models.representation_spec import RepresentationSpec
+from models.representations import LOG_FLOOR, represent, represent_crops
 from models.toy import toy_signal_set
 from models.train import TrainConfig, train_cnn
 

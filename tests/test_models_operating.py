@@ -9,7 +9,7 @@ from models.cnn import GearCNN
 from models.data import PairInfo, SignalSet
 from models.io import load_model, save_model
 from models.operating import fit_operating, operating_features
-from models.representations import RepresentationSpec
+from models.representation_spec import RepresentationSpec
 from models.toy import toy_signal_set
 from models.train import TrainConfig, train_cnn
 

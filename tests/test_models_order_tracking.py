@@ -12,7 +12,8 @@ import pytest
 
 from features.synthetic import gear_signal_example
 from models.order_tracking import TRACK_MIN_RAD, mesh_angle, phase_deviation_rad, resample_to_constant_speed, tacho_angle
-from models.representations import RepresentationSpec, represent
+from models.representation_spec import RepresentationSpec
+from models.representations import represent
 
 FS, FR, Z = 4096.0, 20.0, 29
 SPEC = RepresentationSpec(kind="tsa", n_revs=8, samples_per_rev=256)

@@ -14,7 +14,8 @@ from gearpit.errors import InputError
 from models.augment import path_filter
 from models.data import SignalSet
 from models.io import load_model, save_model
-from models.representations import REFERENCE_CLIP, RepresentationSpec, represent
+from models.representation_spec import RepresentationSpec
+from models.representations import REFERENCE_CLIP, represent
 from models.toy import toy_machines_with_references
 from models.train import TrainConfig, train_cnn
 

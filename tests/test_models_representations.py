@@ -8,7 +8,8 @@ import pytest
 
 from gearpit.errors import InputError
 from models.data import PairInfo, SignalSet
-from models.representations import RepresentationSpec, represent
+from models.representation_spec import RepresentationSpec
+from models.representations import represent
 from models.toy import toy_signal_set
 
 SMALL_REP = RepresentationSpec(kind="order", n_revs=4, max_order=30.0)

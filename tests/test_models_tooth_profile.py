@@ -113,7 +113,7 @@ def test_tooth_profile_side_input_is_twelve_standardised_values(simulated_te):
 
 
 def test_a_model_with_the_profile_input_survives_save_and_load(simulated_te, tmp_path):
-    from models.representations import RepresentationSpec
+    from models.representation_spec import RepresentationSpec
     from models.train import TrainConfig, train_cnn
 
     x, rpm, count, z = simulated_te

@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 from datagen.flank import PitMap
-from datagen.geometry import Gear, GearPair, helical_pair_example, spur_pair_example
-from datagen.stiffness import mesh_stiffness, pixel_stiffness_map
+from datagen.geometry import GearPair, helical_pair_example, spur_pair_example
+from datagen.pit_stiffness import pixel_stiffness_map
+from datagen.stiffness import mesh_stiffness
 from stiffness_reference import pair_stiffness_per_width
 
 

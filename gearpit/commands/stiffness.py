@@ -7,8 +7,10 @@ from pathlib import Path
 
 import numpy as np
 
-from datagen.geometry import PRESETS, load_pair, preset
-from datagen.stiffness import PIT_MODELS, mesh_stiffness
+from datagen.geometry import PRESETS, preset
+from datagen.pair_file import load_pair
+from datagen.pit_stiffness import PIT_MODELS
+from datagen.stiffness import mesh_stiffness
 from gearpit.atomic import atomic_path
 from gearpit.errors import InputError, require
 from gearpit.tomlio import check_keys, read_toml

@@ -18,7 +18,7 @@ from gearpit.errors import require
 
 
 def register(sub) -> None:
-    from models.representations import KINDS
+    from models.representation_spec import KINDS
 
     p = sub.add_parser("train", help="train a classifier (CNN or feature baseline) on a dataset", description=__doc__)
     p.add_argument("dataset", type=Path, metavar="DATASET", help="generated dataset directory")

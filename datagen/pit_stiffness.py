@@ -1,0 +1,181 @@
+"""How a pit map changes the compliances of the slices it touches.
+
+:func:`datagen.stiffness.mesh_stiffness` assembles the healthy record from the
+pair compliance table (:func:`datagen.compliance.pair_compliance`); this module
+recomputes the slices of the pitted engagements only (PHYSICS.md section 3):
+
+- Pits (``pit_model="no_contact"``, default): a pitted pixel on the contact line
+  carries no load (a 0.1-0.2 mm deep pit does not close under load), so that
+  slice of that pair drops out while it is there; in addition the material the
+  pits remove lowers the section (area, second moment) of that slice for every
+  load point above them (Ma et al. 2015; Chen & Shao 2011).
+  ``pit_model="weak_spring"`` follows the spur paper literally: a pitted pixel
+  stays a spring whose compliance omits the Hertzian term (its "weak spring"),
+  with the same section loss.
+- The section loss of a tooth is accumulated row by row from the start of
+  active profile up, as increments of the section integrals ``W_n``, ``A_0`` of
+  :mod:`datagen.compliance`; a pit removes at most 90 % of the local thickness.
+
+:func:`pixel_stiffness_map` draws the same model pixel by pixel (the spur
+paper's stiffness distribution picture).
+
+References
+----------
+Ma, H., Li, Z., Feng, M., Feng, R., Wen, B. (2015). Time-varying mesh stiffness calculation of spur gear
+    pairs considering tooth spalling. Eng. Fail. Anal. 66, 166-176.
+Chen, Z., Shao, Y. (2011). Dynamic simulation of spur gear with tooth root crack propagating along tooth
+    width and crack depth. Eng. Fail. Anal. 18, 2149-2164.
+The spur paper: ../shared/seeds/000_3879ffd8da6fd0be.txt (pixel / weak-spring model).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from datagen.compliance import PairCompliance, ToothBeam, beam_compliance, pair_compliance
+from datagen.flank import PitMap
+from gearpit.errors import InputError, require
+
+PIT_MODELS = ("no_contact", "weak_spring")
+
+#: a pit may remove at most this fraction of the section thickness (keeps 1/I finite)
+_MAX_THICKNESS_LOSS = 0.9
+
+
+def normalise_pits(pair, pits) -> tuple[PitMap, ...]:
+    """``pits`` (None, a PitMap or a sequence of PitMaps) as a tuple, checked against the flanks of ``pair``."""
+    if pits is None:
+        return ()
+    maps = (pits,) if isinstance(pits, PitMap) else tuple(pits)
+    seen = set()
+    for pm in maps:
+        require(isinstance(pm, PitMap), "pits", type(pm).__name__, "a PitMap or a sequence of PitMaps")
+        require(pm.gear not in seen, "pits.gear", pm.gear, "at most one pit map per gear")
+        seen.add(pm.gear)
+        expected = pair.flank_grid(pm.gear, pm.grid.n_profile, pm.grid.n_face)
+        for name in ("profile_length_m", "face_width_m"):
+            got, want = getattr(pm.grid, name), getattr(expected, name)
+            if not math.isclose(got, want, rel_tol=1e-6):
+                raise InputError(f"pits.grid.{name}", got, f"{want:.6g} (the {pm.gear} flank of pair {pair.name})")
+        z = pair._gear(pm.gear).teeth
+        for t in pm.depth_m:
+            require(t < z, "pits.tooth", t, f"a tooth index in [0, {z - 1}] of the {pm.gear}")
+    return maps
+
+
+@dataclass(frozen=True, eq=False)
+class _PitGeometry:
+    """Per pitted tooth: cumulative section loss (rows+1, cols) and the pixel mask."""
+
+    depth: np.ndarray
+    dW: np.ndarray   # (3, rows+1, cols)
+    dA0: np.ndarray  # (rows+1, cols)
+
+
+def _section_loss(pair, beam: ToothBeam, which: str, depth: np.ndarray, grid) -> _PitGeometry:
+    """Cumulative W_n, A_0 increments that the pits of one tooth cause, row by row from the SAP up."""
+    rb = beam.base_radius_m
+    t_sap, _ = pair.active_roll_range_rad(which)
+    s_edges = np.arange(grid.n_profile + 1) * grid.ds_m
+    t_edges = np.sqrt(t_sap**2 + 2.0 * s_edges / rb)
+    a = beam.alpha2_rad - t_edges
+    y_edges = rb * (np.cos(a) - t_edges * np.sin(a)) - beam.y_root_m
+    t_mid = 0.5 * (t_edges[1:] + t_edges[:-1])
+    a_mid = beam.alpha2_rad - t_mid
+    z_mid = rb * (np.cos(a_mid) - t_mid * np.sin(a_mid)) - beam.y_root_m
+    thick = 2.0 * rb * (t_mid * np.cos(a_mid) + np.sin(a_mid))
+    dy = np.diff(y_edges)
+    loss = np.minimum(depth, _MAX_THICKNESS_LOSS * thick[:, None])
+    t_pit = thick[:, None] - loss
+    d_inv_i = 12.0 / t_pit**3 - 12.0 / thick[:, None] ** 3
+    d_inv_a = 1.0 / t_pit - 1.0 / thick[:, None]
+    dW = np.zeros((3, grid.n_profile + 1, grid.n_face))
+    for n in range(3):
+        dW[n, 1:] = np.cumsum(d_inv_i * (z_mid**n * dy)[:, None], axis=0)
+    dA0 = np.zeros((grid.n_profile + 1, grid.n_face))
+    dA0[1:] = np.cumsum(d_inv_a * dy[:, None], axis=0)
+    return _PitGeometry(depth=depth, dW=dW, dA0=dA0)
+
+
+def pit_overrides(pair, pc: PairCompliance, maps, P: int, g_cycle, dw: float, w_slices, pit_model: str) -> dict:
+    """Slice stiffness of every pitted engagement, keyed by (engagement m, slot)."""
+    if not any(pm.pitted_teeth for pm in maps):
+        return {}
+    E, G = pair.material.youngs_modulus_pa, pair.material.shear_modulus_pa
+    b_c = pair.contact_face_width_m
+    per_gear = {}
+    for pm in maps:
+        if not pm.pitted_teeth:
+            continue
+        beam = pc.beams[pm.gear]
+        offset = (pair._gear(pm.gear).face_width_m - b_c) / 2.0
+        cols = np.clip(((w_slices + offset) / pm.grid.dw_m).astype(np.int64), 0, pm.grid.n_face - 1)
+        geo = {t: _section_loss(pair, beam, pm.gear, pm.depth_m[t], pm.grid) for t in pm.pitted_teeth}
+        per_gear[pm.gear] = (pm, beam, cols, geo)
+    z = {"pinion": pair.pinion.teeth, "wheel": pair.wheel.teeth}
+    engaged = sorted({m for gear, (pm, *_rest) in per_gear.items() for m in range(P) if m % z[gear] in pm.pitted_teeth})
+    n_slots = g_cycle.shape[1]
+    out = {}
+    for m in engaged:
+        for s in range(n_slots):
+            g = g_cycle[:, s, :]
+            contact = ~np.isnan(g)
+            if not contact.any():
+                continue
+            g0 = np.where(contact, g, pair.contact_start_m)
+            comp = pc(g0)
+            pitted_here = np.zeros(g.shape, bool)
+            for gear, (pm, beam, cols, geo) in per_gear.items():
+                tooth = m % z[gear]
+                if tooth not in geo:
+                    continue
+                pg = geo[tooth]
+                t_sap, _ = pair.active_roll_range_rad(gear)
+                roll = pair.roll_angle_rad(gear, g0)
+                s_arc = beam.base_radius_m * (roll**2 - t_sap**2) / 2.0
+                rows = np.clip((s_arc / pm.grid.ds_m).astype(np.int64), 0, pm.grid.n_profile - 1)
+                colg = np.broadcast_to(cols[None, :], rows.shape)
+                pitted_here |= pg.depth[rows, colg] > 0
+                a1, Y, h = beam.load_point(roll)
+                W = pg.dW[:, rows, colg]
+                b, sh, ax = beam_compliance(a1, Y, h, W, pg.dA0[rows, colg], E, G)
+                comp = comp + b + sh + ax
+            if pit_model == "no_contact":
+                k = np.where(contact & ~pitted_here, dw / comp, 0.0)
+            else:
+                comp = np.where(pitted_here, comp - pc.c_hertz, comp)
+                k = np.where(contact, dw / comp, 0.0)
+            out[(m, s)] = k
+    return out
+
+
+def pixel_stiffness_map(pair, pit_map: PitMap, tooth: int, *, pit_model: str = "no_contact") -> np.ndarray:
+    """Stiffness of each flank pixel while it is on the contact line (N/m per pixel column).
+
+    The spur paper's "stiffness distribution" picture (its Figs 11-12): row
+    ``i`` at its contact position, column ``j`` as a slice of the pixel's width.
+    """
+    require(pit_model in PIT_MODELS, "pit_model", pit_model, f"one of: {', '.join(PIT_MODELS)}")
+    grid = pit_map.grid
+    pc = pair_compliance(pair)
+    beam = pc.beams[pit_map.gear]
+    t_sap, _ = pair.active_roll_range_rad(pit_map.gear)
+    roll = np.sqrt(t_sap**2 + 2.0 * grid.s_centres_m / beam.base_radius_m)
+    if pit_map.gear == "pinion":
+        g = roll * beam.base_radius_m
+    else:
+        g = pair.line_of_action_length_m - roll * beam.base_radius_m
+    comp = np.repeat(pc(g)[:, None], grid.n_face, axis=1)
+    depth = pit_map.depth_m.get(tooth, np.zeros(grid.shape))
+    pg = _section_loss(pair, beam, pit_map.gear, depth, grid)
+    a1, Y, h = beam.load_point(roll)
+    rows = np.arange(grid.n_profile)
+    b, sh, ax = beam_compliance(a1[:, None], Y[:, None], h[:, None], pg.dW[:, rows, :], pg.dA0[rows, :],
+                                pair.material.youngs_modulus_pa, pair.material.shear_modulus_pa)
+    comp = comp + b + sh + ax
+    pitted = depth > 0
+    if pit_model == "no_contact":
+        return np.where(pitted, 0.0, grid.dw_m / comp)
+    return grid.dw_m / np.where(pitted, comp - pc.c_hertz, comp)
