@@ -64,7 +64,7 @@ def _search_and_confirm_payload(names_: list, payload: bytes):
 
 def attribute(ref: Reference, model, baseline_residual: np.ndarray, *, candidates=None,
               settings: AttributionSettings | None = None, disagreements=(), parallel: bool = True,
-              calibration=None) -> Attribution:
+              calibration=None, model_error_db: float | None = None) -> Attribution:
     """Fit, rank and flag (module docstring).
 
     Parameters
@@ -85,6 +85,9 @@ def attribute(ref: Reference, model, baseline_residual: np.ndarray, *, candidate
     calibration : compare.calibration.Calibration, optional
         The nuisance calibration that made ``model`` (its drive train holds the calibrated values); the
         leading periodic candidates then get their nuisances refitted with the effect in (module docstring).
+    model_error_db : float, optional
+        The excess error of the comparison that ``baseline_residual`` comes from: a time-stepped candidate is
+        claimed only if it lowers this one by ``claim_reduction`` too (:mod:`compare.candidates`).
     """
     from datagen.effects import get, names
 
@@ -136,6 +139,10 @@ def attribute(ref: Reference, model, baseline_residual: np.ndarray, *, candidate
     if calibration is not None:     # the drive train each candidate was fitted at (refitted ones keep theirs)
         for c in results:
             c.nuisance = c.nuisance or dict(calibration.values)
+    if model_error_db is not None:
+        for c in results:
+            if c.effect in transient:
+                c.model_error_db = float(model_error_db)
     results.sort(key=lambda c: -c.reduction)
     claimed = choose_claim(results, settings)
     return Attribution(candidates=results, unexplained=unexplained_of(results, disagreements, settings), elapsed_s=time.perf_counter() - t0,

@@ -167,7 +167,8 @@ def compare_and_attribute(measurement, model, *, reference=None, calibrate=None,
         a = None
         if attribution:
             a = attribute(ref, c.model, c.evaluation.residuals.residual_db, candidates=candidates, settings=settings,
-                          disagreements=c.disagreements, parallel=parallel, calibration=c.calibration)
+                          disagreements=c.disagreements, parallel=parallel, calibration=c.calibration,
+                          model_error_db=c.evaluation.residuals.excess_total_db)
             settle_rivals(ref, c, a, settings, seed=seed)
         return a
 

@@ -125,7 +125,13 @@ SCHEMA = {
                                                             "type": ["number", "null"],
                                                             "description": "1-sigma of the error over "
                                                                            "realisations of a chaotic record; "
-                                                                           "null: the record is regular"}}}},
+                                                                           "null: the record is regular"},
+                                                        "model_error_db": {
+                                                            "type": ["number", "null"],
+                                                            "description": "a time-stepped candidate: the excess "
+                                                                           "error of the model as compared, which "
+                                                                           "a claim must lower by 30 % too; null: "
+                                                                           "not checked (periodic candidates)"}}}},
                 "unexplained": {"type": "array", "items": {"type": "object", "required": ["key", "text"]}},
                 "claimed": {"type": "array", "items": {"type": "string"}},
                 "rivals": {"type": "array", "items": {"type": "string"},

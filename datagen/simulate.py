@@ -158,6 +158,8 @@ class Case:
         require(_PASS * self.fs_hz > fm, "fs_hz", self.fs_hz,
                 f"> {fm / _PASS:.6g} Hz (the mesh frequency {fm:.6g} Hz must lie in the flat pass band 0.4 fs)")
         require(self.pit_gear in ("pinion", "wheel"), "pits.gear", self.pit_gear, "one of: pinion, wheel")
+        require(isinstance(self.solver, SolverOptions), "solver", type(self.solver).__name__,
+                "a SolverOptions (a dict of its fields: SolverOptions(**d))")
         require(self.pits is None or isinstance(self.pits, PitMap) or hasattr(self.pits, "build"), "pits",
                 type(self.pits).__name__, "None, a PitMap or a PitSpec")
         object.__setattr__(self, "effects", build_effects(self.effects))
