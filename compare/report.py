@@ -206,8 +206,10 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
         parts.append(f"<p>{att['n_simulations']} simulations in {att['elapsed_s']:.1f} s. Sigma '-' means not "
                      "identifiable from these views. An effect is claimed when it lowers the error by 30 % or more "
                      "and raises no view's error by more than 1 dB (or a quarter of its fall of the total, when "
-                     "larger); a time-stepped effect is fitted on a window and measured on the whole record "
-                     "before it is ranked.</p>")
+                     "larger), unless the model already agrees with the measurement within the noise (excess "
+                     "error below the noise error); a time-stepped effect is fitted on a window and measured on "
+                     "the whole record before it is ranked, and must lower the comparison's own error by 30 % "
+                     "too.</p>")
         if att.get("resolution"):
             from compare.channels import resolution_message
 
