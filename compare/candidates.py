@@ -22,7 +22,7 @@ confirmed on the whole record" and is not claimed.
 Nothing is claimed against a baseline that agrees with the measurement within the noise: an excess error
 below ``min_excess_to_noise`` (1) times the noise error ``N`` (:mod:`compare.error`, step 5), i.e. a raw error
 below ``sqrt(2) N``. Measured with the rig's own drive train as the model (the right model; four rigs, spur
-and helical, 10-40 dB SNR, 6 noise draws each, ``tests/test_compare_attribution.py``): the excess error is
+and helical, 10-40 dB SNR, 6 noise draws each, ``tests/test_compare_claim_rule.py``): the excess error is
 0-0.78 ``N`` on 40 of 42 draws (median 0.4), 1.3 and 2.2 ``N`` once each; every hidden-effect example starts
 at 3.3-26 ``N``. Without the rule a healthy rig recorded at 10 dB SNR, calibrated to an excess error of 0.03
 dB against a noise error of 0.8 dB, had a housing mode claimed for lowering it to 0.016 dB (46 %).
@@ -168,7 +168,7 @@ def passes_claim_rule(c: CandidateResult, settings: AttributionSettings) -> bool
     allowed = max(settings.max_view_rise_db, settings.rise_per_gain * (c.baseline_error_db - c.error_db))
     lowers_model = not math.isfinite(c.model_error_db) or c.error_db <= (1 - settings.claim_reduction) * c.model_error_db
     return (c.reduction >= settings.claim_reduction and c.worst_view_rise_db <= allowed and lowers_model
-            and not within_noise(c.baseline_error_db, combine(c.noise_view_db) if c.noise_view_db else 0.0, settings))
+            and not within_noise(c.baseline_error_db, combine(c.noise_view_db), settings))
 
 
 def within_noise(excess_db: float, noise_db: float, settings: AttributionSettings) -> bool:

@@ -1,0 +1,147 @@
+"""The claim rule of the attribution (compare.candidates): which fitted candidate is claimed, and which are its rivals.
+
+Reference: the issue's "flag disagreements that no registered effect explains instead of forcing an attribution".
+The rule is tested on candidate results built by hand from measured cases (the numbers in each docstring), and
+its noise threshold against the simulator's truth: the right model (the rig's own drive train) agrees with a
+rig within the noise, a hidden effect does not. The end-to-end controls that found the two newer conditions
+(a healthy rig at 10 dB SNR, one at 3000 rpm) are slow tests in tests/test_compare_attribution.py.
+"""
+from __future__ import annotations
+
+import pytest
+
+from compare.comparison import compare
+from compare.model import ComparisonModel
+from compare.synthetic import HIDDEN_EXAMPLES, NUISANCE, rig_measurement
+
+
+def test_claim_needs_the_reduction_and_no_view_traded():
+    """choose_claim: the best candidate above the claim threshold whose views all stay within
+    max_view_rise_db of the baseline's; a candidate that fits one view by spoiling another (the mains-hum
+    case: band 7.1 -> 3.1 dB, order 0.7 -> 3.3 dB) is passed over; nothing below the threshold is claimed."""
+    from compare.candidates import AttributionSettings, CandidateResult, choose_claim
+
+    base = {"order": 0.66, "band": 7.07, "envelope": 0.68}
+
+    def cand(name, total, views):
+        return CandidateResult(name, "", {}, {}, total, 3.19, dict(views), "2 s", 1, baseline_view_error_db=base)
+
+    settings = AttributionSettings()
+    trader = cand("transmission_path", 2.19, {"order": 3.26, "band": 3.07, "envelope": 0.40})
+    honest = cand("pitch_error", 2.20, {"order": 0.60, "band": 3.30, "envelope": 0.60})
+    weak = cand("tip_relief", 3.10, {"order": 0.60, "band": 6.90, "envelope": 0.60})
+    assert trader.worst_view_rise_db == pytest.approx(2.60) and honest.worst_view_rise_db <= 0.0
+    ranked = sorted([trader, weak], key=lambda c: -c.reduction)
+    assert choose_claim(ranked, settings) is None and not any(c.claimed for c in ranked)
+    ranked = sorted([cand("transmission_path", 2.19, trader.view_error_db), honest, weak], key=lambda c: -c.reduction)
+    assert [c.effect for c in ranked][:2] == ["transmission_path", "pitch_error"]     # the trader ranks first
+    assert choose_claim(ranked, settings).effect == "pitch_error" and not ranked[0].claimed
+    # the same trade within the allowed rise is claimed
+    assert choose_claim([trader], AttributionSettings(max_view_rise_db=3.0)).effect == "transmission_path"
+    # a large gain may leave a view a little above a baseline at its noise floor (the calibrated helical rig of
+    # experiments/generalisation_check.py: total 6.86 -> 1.52 dB, stats 0.00 -> 1.18 dB): allowed rise
+    # max(1, 0.25 x 5.34) = 1.34 dB; the same rise with only the trader's 1 dB gain is refused
+    big = {"order": 2.26, "envelope": 10.07, "tsa": 11.35, "stats": 0.0}
+    strong = CandidateResult("pitch_error", "", {}, {}, 1.52, 6.86, {"order": 0.67, "envelope": 2.53, "tsa": 1.83,
+                                                                     "stats": 1.18}, "2 s", 1, baseline_view_error_db=big)
+    assert choose_claim([strong], settings).effect == "pitch_error"
+    small_gain = CandidateResult("pitch_error", "", {}, {}, 2.19, 3.19, {"order": 0.5, "band": 3.0, "envelope": 1.86},
+                                 "2 s", 1, baseline_view_error_db=base)
+    assert small_gain.worst_view_rise_db == pytest.approx(1.18) and choose_claim([small_gain], settings) is None
+
+
+def test_nothing_is_claimed_against_a_baseline_that_agrees_within_the_noise():
+    """compare.candidates, min_excess_to_noise (1): a candidate that removes 46 % of an excess error of 0.03 dB
+    against a noise error of 0.8 dB (a healthy rig at 10 dB SNR after calibration, where a housing mode was
+    claimed before the rule) is not claimed, nor is a rival; the same reduction of a baseline 1.5 noise errors
+    above the noise is; without a measured noise error the rule does not apply."""
+    from compare.candidates import AttributionSettings, CandidateResult, choose_claim, rivals_of, within_noise
+    from compare.error import VIEWS
+
+    noise = {v: 0.8 for v in VIEWS}
+
+    def cand(name, total, baseline, noise_view_db):
+        return CandidateResult(name, "", {}, {}, total, baseline, {v: total for v in VIEWS}, "2 s", 1,
+                               baseline_view_error_db={v: baseline for v in VIEWS}, noise_view_db=noise_view_db)
+
+    settings = AttributionSettings()
+    quiet = [cand("transmission_path", 0.016, 0.03, noise), cand("profile_error", 0.017, 0.03, noise)]
+    assert quiet[0].reduction > 0.45 and within_noise(0.03, 0.8, settings)
+    assert choose_claim(quiet, settings) is None and rivals_of(quiet[0], quiet, settings) == []
+    loud = cand("transmission_path", 0.64, 1.2, noise)                   # 1.5 N, 47 % off
+    assert not within_noise(1.2, 0.8, settings) and choose_claim([loud], settings) is loud
+    assert choose_claim([cand("transmission_path", 0.016, 0.03, {})], settings).effect == "transmission_path"
+    assert not within_noise(0.03, 0.0, settings)
+
+
+def test_a_time_stepped_claim_must_lower_the_error_of_the_model_as_compared():
+    """compare.candidates, model_error_db: the healthy spur rig at 3000 rpm (measured): the time-stepped baseline
+    at the attribution's coarse step has an excess error of 1.73 dB where the comparison (periodic path) has
+    0.50 dB; a speed fluctuation took the former to 0.75 dB (57 %) and was claimed. It is not any more: 0.75 dB
+    is not 30 % below 0.50 dB. A candidate that ends at 0.30 dB (40 % below the comparison) still is; periodic
+    candidates (model_error_db NaN) are not checked."""
+    from compare.candidates import AttributionSettings, CandidateResult, choose_claim
+    from compare.error import VIEWS
+
+    noise = {v: 0.55 for v in VIEWS}
+
+    def cand(total, model_error_db=float("nan")):
+        return CandidateResult("speed_fluctuation", "", {}, {}, total, 1.73, {v: total for v in VIEWS}, "1 s", 1,
+                               baseline_view_error_db={v: 1.73 for v in VIEWS}, noise_view_db=noise,
+                               model_error_db=model_error_db)
+
+    settings = AttributionSettings()
+    assert cand(0.75, 0.50).reduction > 0.5 and choose_claim([cand(0.75, 0.50)], settings) is None
+    assert choose_claim([cand(0.30, 0.50)], settings) is not None
+    assert choose_claim([cand(0.75)], settings) is not None
+    assert cand(0.75, 0.50).to_dict()["model_error_db"] == 0.50 and cand(0.75).to_dict()["model_error_db"] is None
+
+
+def test_the_right_model_agrees_within_the_noise_and_a_hidden_effect_does_not():
+    """The null distribution under min_excess_to_noise. Source: the simulator's truth: with the rig's own drive
+    train (compare.synthetic.NUISANCE) as the model, the rig differs from it by the noise draw, the sensor gain
+    (fitted) and the speed (refined), so its excess error X is noise scatter: measured X / N 0-0.78 on 40 of 42
+    draws (four rigs, 10-40 dB SNR; 1.3 and 2.2 once each). Asserted on the rig of the 10 dB false claim (1500
+    rpm, 80 N m, 1.5 s, seeds 3-8): X < N on at least 5 of 6 draws (a broken noise correction or a bias of the
+    gain fit would put X above N), and the hidden pitch error of the examples at X > 3 N."""
+    from compare.candidates import AttributionSettings, within_noise
+
+    model = ComparisonModel().with_drivetrain(NUISANCE)
+    settings = AttributionSettings()
+    agree = []
+    for seed in range(3, 9):
+        m = rig_measurement((), seed=seed, snr_db=10.0, speed_rpm=1500.0, torque_nm=80.0, fs_hz=25600.0,
+                            duration_s=1.5)
+        r = compare(m, model, seed=seed).evaluation.residuals
+        agree.append(within_noise(r.excess_total_db, r.noise_total_db, settings))
+    assert sum(agree) >= 5, agree
+    ex = HIDDEN_EXAMPLES["pitch_error"]
+    r = compare(rig_measurement((ex.effect,), duration_s=1.0), model).evaluation.residuals
+    assert r.excess_total_db > 3 * r.noise_total_db, (r.excess_total_db, r.noise_total_db)
+
+
+def test_rivals_are_the_effects_the_views_cannot_tell_from_the_claim():
+    """rivals_of: effects that pass the claim rule within rival_reduction (5 %) of the claimed one's reduction
+    (the calibrated helical rig of experiments/generalisation_check.py: a hidden speed fluctuation, torque
+    fluctuation 75.8 % against speed fluctuation 75.x %). A close candidate that trades views, or one 6 % behind,
+    or one not confirmed on the whole record, is no rival; nothing claimed -> no rivals."""
+    from compare.candidates import AttributionSettings, CandidateResult, choose_claim, rivals_of
+
+    base = {"order": 10.0, "envelope": 8.0}
+
+    def cand(name, total, views, status="fitted"):
+        return CandidateResult(name, "", {}, {}, total, 10.0, dict(views), "2 s", 1, baseline_view_error_db=base,
+                               status=status)
+
+    settings = AttributionSettings()
+    torque = cand("torque_fluctuation", 2.42, {"order": 2.5, "envelope": 2.3})
+    speed = cand("speed_fluctuation", 2.50, {"order": 2.6, "envelope": 2.4})           # 0.8 % behind
+    far = cand("backlash", 3.10, {"order": 3.2, "envelope": 3.0})                      # 6.8 % behind
+    trader = cand("transmission_path", 2.45, {"order": 0.1, "envelope": 11.0})         # close, but trades views
+    stale = cand("hertz_nonlinear", 2.44, {"order": 2.4, "envelope": 2.4}, status="not confirmed on the whole record")
+    ranked = sorted([speed, far, trader, stale, torque], key=lambda c: -c.reduction)
+    claimed = choose_claim(ranked, settings)
+    assert claimed is torque
+    assert rivals_of(claimed, ranked, settings) == ["speed_fluctuation"]
+    assert rivals_of(claimed, ranked, AttributionSettings(rival_reduction=0.07)) == ["speed_fluctuation", "backlash"]
+    assert rivals_of(None, ranked, settings) == []
