@@ -144,7 +144,9 @@ def slots_at_centre_offset(stiffness, dx_m, dy_m, *, subdivisions: int = 1) -> n
             kn = k_nom[rows, s]
             v[rows, s + 1] *= np.divide(kk[rows % ppc], kn, out=np.ones_like(kn), where=kn > 0)
     v = np.concatenate([v, v[:, -1:]], axis=1)     # the slot after the last: out of contact, any finite value
-    edges = (np.ceil(shift / h - 1e-9), np.floor((pair.contact_end_m - pair.contact_start_m + shift) / h + 1e-9))
+    edges = (shift / h, (pair.contact_end_m - pair.contact_start_m + shift) / h)   # in grid steps from A
+    if stiffness.edges == "point":      # as datagen.stiffness.contact_fraction: at the cell boundaries
+        edges = (np.ceil(edges[0] - 1e-9) - 0.5, np.floor(edges[1] + 1e-9) + 0.5)
     d_start = ((start - pair.contact_start_m) - dg) / h
     d_end = -dg / h
     block = max(1, _BLOCK_ELEMENTS // ((S + 1) * shift.size))
@@ -157,42 +159,49 @@ def slots_at_centre_offset(stiffness, dx_m, dy_m, *, subdivisions: int = 1) -> n
 
 def _points(v, edges, d_start, d_end, i, ppc: int, q: int) -> np.ndarray:
     """Columns (early pair, slots 0 ..) at record points ``i`` from the grid samples ``v`` (see
-    :func:`slots_at_centre_offset`): contact fraction at the point times the linear interpolation of the two
-    grid samples around it, a sample out of contact taking the value of the other."""
+    :func:`slots_at_centre_offset`): the contact share is the nominal record's share at the point (its grid
+    cells' box-filtered shares, linearly interpolated), each edge moved by its own displacement; the value in
+    contact is the two grid samples' values, weighted by their shares against the displaced edges. No
+    displacement gives the nominal record as the dynamics reads it: its grid samples and their linear
+    interpolation; a displacement ``d`` of both edges and a constant value give it read ``d`` steps on."""
+    from datagen.stiffness import FRACTION_SNAP, cell_share
+
     n_grid, n_cols = v.shape[0], v.shape[1] - 1
     ia, sub = np.divmod(i, q)                                   # grid sample below the point, points past it
     c0 = ia % ppc
     cols = np.arange(n_cols)
     j = (c0[:, None] + (cols[None, :] - 1) * ppc)[:, :, None].astype(float)     # grid coordinate of sample a
-    # contact fraction clip(j - lo + 1, 0, 1) * clip(hi - j + 1, 0, 1), from the two distances to the edges
-    x = j - (edges[0] + d_start[:, None, None]) + 1.0
-    y = (edges[1] + d_end[:, None, None]) - j + 1.0
+    # nominal distances (in steps, plus 1/2) from the contact's start to sample a's cell end, and from sample
+    # a's cell start to the contact's end: cell_share(x0, y0) is sample a's nominal share
+    x0 = j - edges[0] + 0.5
+    y0 = edges[1] - j + 0.5
+    d_s, d_e = d_start[:, None, None], d_end[:, None, None]
     v_a = v[ia, :n_cols]
     if q == 1:
-        f = _fraction(x, y)
-        return np.where(f > 0, f * v_a, 0.0).sum(axis=2)
+        return (cell_share(x0 - d_s, y0 + d_e) * v_a).sum(axis=2)
     t = (sub / q)[:, None, None]
-    f = _fraction(x + t, y - t)
+    # each edge's share factor, interpolated between the nominal lattice samples around the displaced point
+    share = _lattice_interp(x0, t - d_s) * _lattice_interp(y0, d_e - t)
+    share[share < FRACTION_SNAP] = 0.0
+    share[share > 1.0 - FRACTION_SNAP] = 1.0
     # sample b: the next grid sample of the same engagement (in the next slot across a cycle boundary)
     ib = (ia + 1) % n_grid
     v_b = v[ib[:, None], cols[None, :] + (c0 == ppc - 1)[:, None]]
-    in_a = (x >= _SNAP) & (y >= _SNAP)                      # the fraction at sample a is > 0
-    in_b = (x >= _SNAP - 1.0) & (y >= 1.0 + _SNAP)          # at sample b
-    v_i = np.where(in_a, np.where(in_b, v_a * (1.0 - t) + v_b * t, v_a), v_b)
-    return (f * v_i).sum(axis=2)
+    w_a = (1.0 - t) * cell_share(x0 - d_s, y0 + d_e)
+    w_b = t * cell_share(x0 + 1.0 - d_s, y0 - 1.0 + d_e)
+    w = w_a + w_b
+    value = np.where(w > 0, (w_a * v_a + w_b * v_b) / np.where(w > 0, w, 1.0), (1.0 - t) * v_a + t * v_b)
+    value = np.where(t == 0.0, v_a, value)
+    return (share * value).sum(axis=2)
 
 
-#: contact fractions within this of 0 or 1 are 0 or 1 (a position on the grid is in contact or not)
-_SNAP = 1e-12
-
-
-def _fraction(x, y):
-    """``clip(x, 0, 1) * clip(y, 0, 1)``, snapped to 0 and 1 within :data:`_SNAP`."""
-    f = np.clip(x, 0.0, 1.0)
-    f *= np.clip(y, 0.0, 1.0)
-    f[f < _SNAP] = 0.0
-    f[f > 1.0 - _SNAP] = 1.0
-    return f
+def _lattice_interp(z0, dz):
+    """Linear interpolation of ``clip(z, 0, 1)`` between the lattice points ``z0 + n`` (n integer) around
+    ``z0 + dz``."""
+    n = np.floor(dz)
+    tau = dz - n
+    lo = z0 + n
+    return (1.0 - tau) * np.clip(lo, 0.0, 1.0) + tau * np.clip(lo + 1.0, 0.0, 1.0)
 
 
 def refine_slots(x: np.ndarray, positions_per_cycle: int, subdivisions: int) -> np.ndarray:

@@ -86,7 +86,10 @@ class DynamicCase:
 
     @property
     def dt_max(self) -> float:
-        return self.model.time_step_s(self.omega_dt)
+        """Largest time step: ``omega_max dt <= omega_dt`` on the mean system, and at least one step per position
+        of the mesh record (a step longer than a position would sample the record's contact edges, which it
+        resolves to a position, at the step instead: an edge timing error of up to a step)."""
+        return min(self.model.time_step_s(self.omega_dt), 1.0 / (self.mesh_hz * self.record.positions_per_cycle))
 
     @property
     def discard_s(self) -> float:

@@ -75,6 +75,7 @@ class MeshStiffness:
     _g_cycle: np.ndarray = field(repr=False)        # (ppc, n_slots, n_slices) contact position, NaN if none
     _k_cycle: np.ndarray = field(repr=False)        # (ppc, n_slots, n_slices) healthy slice stiffness
     _overrides: dict = field(repr=False)            # (m, slot) -> (ppc, n_slices) slice stiffness of pitted pairs
+    edges: str = "box"                              # contact edges on the grid: EDGE_MODES
 
     @property
     def n_slots(self) -> int:
@@ -127,13 +128,18 @@ class MeshStiffness:
         n_cycles = P if n_cycles is None else int(n_cycles)
         z1, z2 = self.pair.pinion.teeth, self.pair.wheel.teeth
         g = np.nan_to_num(self._g_cycle, nan=self.pair.contact_start_m)          # (ppc, S, n_slices)
-        g_t, k_t = g.transpose(1, 0, 2), self._k_cycle.transpose(1, 0, 2)           # (S, ppc, n_slices)
+        k_cycle, overrides = self._k_cycle, self._overrides
+        if self.pair.base_helix_angle_rad == 0.0:
+            # spur: every slice of a pair sits at the same g, so f is evaluated once and weighted by the pair's k
+            g, k_cycle = g[:, :, :1], k_cycle.sum(axis=2, keepdims=True)
+            overrides = {key: kk.sum(axis=1, keepdims=True) for key, kk in overrides.items()}
+        g_t, k_t = g.transpose(1, 0, 2), k_cycle.transpose(1, 0, 2)                 # (S, ppc, n_slices)
         out = np.empty((n_cycles, ppc, S))
         chunk = max(1, 2_000_000 // g.size)                                         # bound the temporaries
         for c0 in range(0, n_cycles, chunk):
             m = np.arange(c0, min(n_cycles, c0 + chunk))[:, None] - np.arange(S)[None, :]  # engagements
             k = np.broadcast_to(k_t[None], (m.shape[0],) + k_t.shape).copy()
-            for (mm, s), kk in self._overrides.items():
+            for (mm, s), kk in overrides.items():
                 k[np.nonzero(m[:, s] % P == mm)[0], s] = kk
             shape = k.shape
             vals = f(np.broadcast_to(g_t[None], shape), np.broadcast_to((m % z1)[:, :, None, None], shape),
@@ -220,8 +226,50 @@ def slot_positions(pair, u, slots, shift):
             - shift[None, None, :])
 
 
+#: contact fractions within this of 0 or 1 are 0 or 1 (a grid cell that only touches a contact edge)
+FRACTION_SNAP = 1e-9
+#: how a contact edge between two grid positions enters the record (:func:`contact_fraction`)
+EDGE_MODES = ("point", "box")
+
+
+def contact_fraction(pair, positions_per_cycle: int, n_slots: int, shift, edges: str = "box") -> np.ndarray:
+    """(ppc, n_slots, n_slices) share of each grid position in which each slice of each slot is in contact,
+    ``A <= g <= E``.
+
+    ``edges="point"``: the position is in contact or not (point sampling; each edge moves to the grid position
+    after it, a timing error of up to one step that is the same in every cycle). ``"box"``: the share of the
+    position's cell ``[x - h/2, x + h/2]`` in contact (the edges box-filtered over one step: the area under the
+    linearly interpolated record is the exact contact length, each edge keeps its time to first order; the
+    slice's stiffness in a part cell is that at the edge, ``g`` clipped into ``[A, E]``).
+
+    Measured (spur-gds, 50 N m, healthy, periodic path, pinion-bearing acceleration at 12.8 kHz, RMS of the
+    difference from 2048 box positions at omega_max dt 0.03): 64 positions per cycle, point / box: 63 / 36 %
+    at 600 rpm, 24 / 4.2 % at 1800 rpm, 12 / 1.2 % at 3000 rpm; 256 positions: 13 / 1.7 %, 4.3 / 0.9 %,
+    4.2 / 1.8 %. Box edges converge as the square of the step, point edges linearly."""
+    require(edges in EDGE_MODES, "stiffness.edges", edges, f"one of: {', '.join(EDGE_MODES)}")
+    ppc = positions_per_cycle
+    h = pair.base_pitch_m / ppc
+    j = np.arange(ppc)[:, None, None] + ppc * np.arange(n_slots)[None, :, None]       # cell centres, steps from A
+    shift = np.asarray(shift, float)[None, None, :]
+    lo, hi = shift / h, (pair.contact_end_m - pair.contact_start_m + shift) / h
+    if edges == "point":        # the edges moved to the cell boundaries around the first and last position inside
+        lo, hi = np.ceil(lo - 1e-9) - 0.5, np.floor(hi + 1e-9) + 0.5
+    return cell_share(j - lo + 0.5, hi - j + 0.5)
+
+
+def cell_share(x, y) -> np.ndarray:
+    """``clip(x, 0, 1) * clip(y, 0, 1)``: the share of a cell in contact, ``x`` and ``y`` the distances (in
+    cells) from the cell's start to the contact's start and from the contact's end to the cell's end, plus one;
+    exact while the contact is longer than a cell. Shares within :data:`FRACTION_SNAP` of 0 or 1 are 0 or 1."""
+    f = np.clip(x, 0.0, 1.0)
+    f *= np.clip(y, 0.0, 1.0)
+    f[f < FRACTION_SNAP] = 0.0
+    f[f > 1.0 - FRACTION_SNAP] = 1.0
+    return f
+
+
 def mesh_stiffness(pair, *, pits=None, positions_per_cycle: int = 64, n_slices: int | None = None,
-                   pit_model: str = "no_contact") -> MeshStiffness:
+                   pit_model: str = "no_contact", edges: str = "box") -> MeshStiffness:
     """Mesh stiffness of ``pair`` over one revolution of the pitted gear(s).
 
     Parameters
@@ -237,6 +285,9 @@ def mesh_stiffness(pair, *, pits=None, positions_per_cycle: int = 64, n_slices: 
         Slices across the contact face width. Default: the pit maps' face
         columns, else 1 for spur and 100 for helical gears.
     pit_model : {"no_contact", "weak_spring"}
+    edges : {"point", "box"}
+        Contact edges between grid positions: point-sampled, or box-filtered over a position step
+        (:func:`contact_fraction`, measured there; "box" needs ~4x fewer positions for the same accuracy).
 
     Returns
     -------
@@ -261,16 +312,16 @@ def mesh_stiffness(pair, *, pits=None, positions_per_cycle: int = 64, n_slices: 
     gears = {pm.gear for pm in maps if pm.pitted_teeth}
     P = {frozenset(): z1, frozenset({"pinion"}): z1, frozenset({"wheel"}): z2}.get(frozenset(gears), math.lcm(z1, z2))
     pc = pair_compliance(pair)
-    A, E_end, pb = pair.contact_start_m, pair.contact_end_m, pair.base_pitch_m
+    A, E_end = pair.contact_start_m, pair.contact_end_m
     dw, w, shift = face_slices(pair, n_slices)
     n_slots = int(math.floor(pair.contact_ratio_total)) + 2
     u = np.arange(positions_per_cycle) / positions_per_cycle
     g = slot_positions(pair, u, np.arange(n_slots), shift)
-    eps = 1e-12 * pb
-    in_contact = (g >= A - eps) & (g <= E_end + eps)
-    g = np.where(in_contact, g, np.nan)
-    k_cycle = np.where(in_contact, dw / pc(np.nan_to_num(g, nan=A)), 0.0)
-    overrides = pit_overrides(pair, pc, maps, P, g, dw, w, pit_model)
+    frac = contact_fraction(pair, positions_per_cycle, n_slots, shift, edges)
+    in_contact = frac > 0
+    g = np.where(in_contact, np.clip(g, A, E_end), np.nan)
+    k_cycle = np.where(in_contact, frac * dw / pc(np.nan_to_num(g, nan=A)), 0.0)
+    overrides = {key: frac[:, key[1]] * k for key, k in pit_overrides(pair, pc, maps, P, g, dw, w, pit_model).items()}
     k_slots = np.tile(k_cycle.sum(axis=2), (P, 1))
     n_pos = P * positions_per_cycle
     cyc = np.arange(n_pos) // positions_per_cycle
@@ -282,4 +333,4 @@ def mesh_stiffness(pair, *, pits=None, positions_per_cycle: int = 64, n_slices: 
     return MeshStiffness(pair=pair, period_cycles=P, positions_per_cycle=positions_per_cycle, n_slices=n_slices,
                          pit_model=pit_model, pits=maps, x_cycles=np.arange(n_pos) / positions_per_cycle,
                          k_n_per_m=k_slots.sum(axis=1), k_slots_n_per_m=k_slots, engagement=engagement,
-                         _g_cycle=g, _k_cycle=k_cycle, _overrides=overrides)
+                         _g_cycle=g, _k_cycle=k_cycle, _overrides=overrides, edges=edges)

@@ -30,23 +30,57 @@ def test_iso6336_mean_stiffness_range():
         assert 12.0 <= s["mean_n_per_mm_um"] <= 25.0, s
 
 
+@pytest.mark.parametrize("edges", ["point", "box"])
 @pytest.mark.parametrize("pair_fn", [spur_pair_example, helical_pair_example])
-def test_agrees_with_quad_reference(pair_fn):
-    """Independent slow oracle (scipy quad on the angular PE formulas, tests/stiffness_reference.py): 0.5 %."""
+def test_agrees_with_quad_reference(pair_fn, edges):
+    """Independent slow oracle (scipy quad on the angular PE formulas, tests/stiffness_reference.py): 0.5 %.
+    Point edges: a slice counts where ``A <= g <= E``. Box edges: a grid position stands for its cell
+    ``[x - h/2, x + h/2]``, and a slice whose contact starts or ends inside the cell counts with the share of the
+    cell it is in contact, at the stiffness at its edge (datagen.stiffness.contact_fraction); spur position 0 is
+    such a cell (an entry at x = 0)."""
     pair = pair_fn()
-    ms = mesh_stiffness(pair, positions_per_cycle=16, n_slices=40)
+    ppc = 16
+    ms = mesh_stiffness(pair, positions_per_cycle=ppc, n_slices=40, edges=edges)
     A, E, pb = pair.contact_start_m, pair.contact_end_m, pair.base_pitch_m
     b = pair.contact_face_width_m
     w = (np.arange(40) + 0.5) * b / 40
     shift = w * math.tan(pair.base_helix_angle_rad)
-    for i in range(0, 16, 3):
+    h = 1.0 / ppc
+    for i in range(0, ppc, 3):
         x = ms.x_cycles[i]
         ref = 0.0
         for s in range(ms.n_slots):
-            for g in A + (x + s) * pb - shift:
-                if A <= g <= E:
-                    ref += pair_stiffness_per_width(pair, g) * b / 40
+            for sh in shift:
+                x_in, x_out = sh / pb - s, (E - A + sh) / pb - s          # contact while x_in <= x <= x_out
+                share = max(0.0, min(x + h / 2, x_out) - max(x - h / 2, x_in)) / h
+                if edges == "point":
+                    share = float(x_in - 1e-9 <= x <= x_out + 1e-9)
+                if share > 0:
+                    g = min(max(A + (x + s) * pb - sh, A), E)
+                    ref += share * pair_stiffness_per_width(pair, g) * b / 40
         assert ms.k_n_per_m[i] == pytest.approx(ref, rel=5e-3)
+
+
+@pytest.mark.parametrize("pair_fn", [spur_pair_example, helical_pair_example])
+@pytest.mark.parametrize("ppc", [16, 64, 100])
+def test_every_slice_is_in_contact_for_the_transverse_contact_ratio(pair_fn, ppc):
+    """Box edges. Definition of the transverse contact ratio (ISO 21771): a slice of the face is in contact for
+    eps_alpha mesh cycles per engagement, so its contact share summed over the slots averages eps_alpha over a
+    cycle, on any grid (to 1e-9), and the record is in contact exactly where the share is positive.
+    Point edges miss it on a slice whose edges fall between grid positions (asserted: helical-dct, 16
+    positions, 50 slices: up to 0.037 off; on spur-gds the two rounded edges happen to cancel, 1.75 for 1.749)."""
+    from datagen.stiffness import contact_fraction, face_slices
+
+    pair = pair_fn()
+    ms = mesh_stiffness(pair, positions_per_cycle=ppc, n_slices=50, edges="box")
+    frac = contact_fraction(pair, ppc, ms.n_slots, face_slices(pair, 50)[2])      # (ppc, slots, slices)
+    assert np.allclose(frac.sum(axis=1).mean(axis=0), pair.contact_ratio_transverse, rtol=0, atol=1e-9)
+    g = np.stack([ms.contact_positions(i) for i in range(ppc)])
+    assert np.array_equal(frac > 0, ~np.isnan(g))
+    assert np.array_equal(frac > 0, np.stack([ms.slice_stiffness(i) for i in range(ppc)]) > 0)
+    if pair_fn is helical_pair_example and ppc == 16:
+        point = contact_fraction(pair, ppc, ms.n_slots, face_slices(pair, 50)[2], edges="point")
+        assert np.abs(point.sum(axis=1).mean(axis=0) - pair.contact_ratio_transverse).max() > 0.03
 
 
 def test_single_pair_stiffness_agrees_with_ross():
@@ -75,12 +109,21 @@ def test_single_pair_stiffness_agrees_with_ross():
 
 
 def test_double_contact_fraction_equals_eps_alpha_minus_one():
-    """Spur invariant: fraction of the mesh cycle with two pairs = eps_alpha - 1 (to one position, 1/500)."""
+    """Spur invariant: fraction of the mesh cycle with two pairs = eps_alpha - 1. Point edges: counted on the
+    positions (to one position, 1/500). Box edges: the pairs' contact shares sum to eps_alpha over the cycle,
+    so the two-pair share is eps_alpha - 1 to round-off; the positions wholly in two-pair contact to the two edge
+    cells (2/500)."""
     pair = spur_pair_example()
-    ms = mesh_stiffness(pair, positions_per_cycle=500)
+    ms = mesh_stiffness(pair, positions_per_cycle=500, edges="point")
     n_pairs = (ms.k_slots_n_per_m > 0).sum(axis=1)
     assert set(np.unique(n_pairs)) == {1, 2}
     assert (n_pairs == 2).mean() == pytest.approx(pair.contact_ratio_transverse - 1, abs=1 / 500 + 1e-12)
+    from datagen.stiffness import contact_fraction
+
+    share = contact_fraction(pair, 500, ms.n_slots, np.zeros(1), edges="box")[:, :, 0]
+    assert share.sum(axis=1).mean() - 1 == pytest.approx(pair.contact_ratio_transverse - 1, abs=1e-9)
+    assert ((share == 1.0).sum(axis=1) == 2).mean() == pytest.approx(pair.contact_ratio_transverse - 1,
+                                                                      abs=2 / 500 + 1e-12)
 
 
 def test_healthy_stiffness_periodic_with_mesh_period():
@@ -107,7 +150,8 @@ def _rect_pits(pair, tooth, rows, cols, depth=0.2e-3, shape=(60, 80), gear="pini
 
 @pytest.mark.parametrize("pair_fn", [spur_pair_example, helical_pair_example])
 def test_pit_acts_only_while_pitted_tooth_in_contact(pair_fn):
-    """Pixel model: a pit on tooth q changes k only for x in [q, q + eps_alpha + eps_beta] (engagement q)."""
+    """Pixel model: a pit on tooth q changes k only for x in [q, q + eps_alpha + eps_beta] (engagement q), to
+    half a position: a position stands for its cell (box edges)."""
     pair = pair_fn()
     q = 4
     pits = _rect_pits(pair, q, (20, 40), (20, 60))
@@ -117,7 +161,7 @@ def test_pit_acts_only_while_pitted_tooth_in_contact(pair_fn):
     changed = np.abs(diff) > 1e-9 * h.mean_n_per_m
     assert changed.any()
     x = p.x_cycles[changed]
-    assert x.min() >= q and x.max() <= q + pair.contact_ratio_total + 1e-9
+    assert x.min() >= q - 0.5 / 40 and x.max() <= q + pair.contact_ratio_total + 0.5 / 40 + 1e-9
     assert np.all(diff <= 1e-6)  # never stiffer with the no-contact model
 
 
