@@ -10,7 +10,7 @@ keys of its own::
     [drivetrain]                            # optional: datagen.lumped_model.DriveTrain fields (SI)
     mesh_damping_ratio = 0.07
     [solver]                                # optional: omega_dt, method, transient_s
-    [stiffness]                             # optional: positions_per_cycle, n_slices, pit_model
+    [stiffness]                             # optional: positions_per_cycle, n_slices, pit_model, edges
     [pits]                                  # optional: pits of the model (datagen.pits.PitSpec keys, gear, grid)
     [[effects]]                             # optional, repeatable: name + parameters (SI)
     name = "eccentricity_pinion"

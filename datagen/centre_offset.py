@@ -75,20 +75,25 @@ def slots_at_centre_offset(stiffness, dx_m, dy_m, *, subdivisions: int = 1) -> n
       shifts.
 
     Along one slice the nominal positions are ``A - shift + j h`` (``j`` an integer, ``h = p_bt / ppc``) and
-    the nominal contact is ``j_s <= j <= j_e`` (point-sampled, as :func:`mesh_stiffness`). The displaced pair
-    is in contact at grid coordinate ``j`` (real) with the fraction ``clip(j - (j_s + d_s) + 1, 0, 1) *
-    clip(j_e + d_e - j + 1, 0, 1)``, ``d_s = (A' - A - dg) / h``, ``d_e = -dg / h``: each edge is the nominal
-    ramp one grid step wide, moved continuously by the displacement (the mean number of pairs in contact
-    changes by exactly ``(A - A') / p_bt``). Its slice stiffness in contact is the linear interpolation, in
-    ``j``, of the healthy slice stiffness at the displaced grid positions ``A - shift + j h + dg`` (``dg`` of
-    that grid sample; the compliance table, held at its end values outside the nominal path: the wheel's roll offset and the flank
-    below the nominal start are not re-tabulated); a grid sample out of contact takes the value of its
-    neighbour in contact, so that a ramp is a straight line to the first value in contact, as the dynamics
-    reads the nominal record. A pitted pair's slice stiffness is its healthy one scaled by the nominal ratio
-    pitted / healthy at the same grid sample (the pit is taken where it was). With no displacement the record
-    is the nominal one at the grid points (bit for bit on a spur pair) and its linear interpolation in between.
+    the nominal contact runs from ``j_s`` to ``j_e`` (real: ``shift / h`` and ``(E - A + shift) / h``; with
+    point edges moved to the cell boundaries around the first and last position inside, as
+    :func:`datagen.stiffness.contact_fraction`). Grid position ``j`` holds the share of its cell
+    ``[j - 1/2, j + 1/2]`` in contact, ``clip(j + 1/2 - j_s, 0, 1) * clip(j_e - j + 1/2, 0, 1)``. The displaced
+    pair's contact runs from ``j_s + d_s`` to ``j_e + d_e``, ``d_s = (A' - A - dg) / h``, ``d_e = -dg / h``;
+    at a record point between two grid positions each edge's share factor is the nominal one, linearly
+    interpolated between the lattice points around the point moved back by the displacement: each edge is the
+    nominal record's edge moved continuously by the displacement (the mean number of pairs in contact changes
+    by exactly ``(A - A') / p_bt``). Its slice stiffness in contact is that of the two grid samples around the
+    point, weighted by their shares against the displaced edges; a sample's value is the healthy slice
+    stiffness at its displaced position ``A - shift + j h + dg`` (``dg`` of that grid sample; the compliance
+    table, held at its end values outside the nominal path: the wheel's roll offset and the flank below the
+    nominal start are not re-tabulated). A pitted pair's slice stiffness is its healthy one scaled by the
+    nominal ratio pitted / healthy at the same grid sample (the pit is taken where it was). With no
+    displacement the record is the nominal one at the grid points (bit for bit on a spur pair) and its linear
+    interpolation in between.
 
-    Measured on ``spur-gds`` at 1000 rpm, 50 N m, 64 positions per cycle, pinion-bearing acceleration over
+    Measured with point edges (before box edges were the default) on ``spur-gds`` at 1000 rpm, 50 N m, 64
+    positions per cycle, pinion-bearing acceleration over
     three wheel revolutions (time stepping; RMS 477 m/s^2 without eccentricity). A pinion eccentricity of
     10 um / 30 um changes the RMS by -7.2 % / -14.0 % on the grid itself (``subdivisions=1``: each moved ramp
     spread over two steps; energy above 8 f_m -14.5 % / -27 %), by -0.9 % / -1.4 % with 4 points per step,
