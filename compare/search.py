@@ -7,7 +7,8 @@ caller (:mod:`compare.attribution`) simulates the points of every effect in one
 batch, so a round costs one :func:`datagen.simulate.simulate` call. Rounds:
 
 - :func:`round_a`: a grid of the first parameter (or the frequencies the
-  measurement points to, for a parameter in Hz), plus the values the effect's
+  measurement points to, for a parameter in Hz, and the midpoints of close
+  neighbours among them: :func:`between_seeds`), plus the values the effect's
   physics singles out at this operating point (its ``fit_seeds``); the second
   at its default, or at three values when the first is a frequency;
 - :func:`round_b`: the second parameter's grid at the best first one (``rich``:
@@ -20,7 +21,8 @@ batch, so a round costs one :func:`datagen.simulate.simulate` call. Rounds:
   bounds by :func:`scipy.optimize.minimize` (L-BFGS-B).
 
 After round A the :data:`MAX_BASINS` lowest local minima of its sweep of the
-first parameter are kept (:meth:`Search.set_basins`) and rounds B-D work around
+first parameter (of a frequency: the best clusters of values) are kept
+(:meth:`Search.set_basins`) and rounds B-D work around
 the best point of each (:func:`around_basins`; a quadratic uses only the points
 of its own basin): error levels cannot tell a tone's amplitude from its
 mirror across a zero, so a landscape can hold two minima of nearly the same
@@ -45,6 +47,8 @@ from compare.fitspace import FitSpace, frequency_seeds, grid
 #: how many local minima of the first round are refined (a level-only view can leave two mirror minima, e.g.
 #: a tip relief as far above the load deflection as another is below it)
 MAX_BASINS = 2
+#: frequency seeds closer than this ratio are one hypothesis (:meth:`Search.set_basins`)
+SEED_CLUSTER = 1.05
 
 @dataclass
 class Trial:
@@ -85,7 +89,8 @@ class Search:
 
     def set_basins(self, n: int = MAX_BASINS) -> None:
         """After the first round: the ``n`` lowest local minima of its sweep of the first parameter (the best
-        over the other parameters at each value), each refined on its own by the later rounds."""
+        over the other parameters at each value), each refined on its own by the later rounds; for a frequency,
+        the best values of the ``n`` best clusters (values within :data:`SEED_CLUSTER`), minima or not."""
         done = [t for t in self.trials if math.isfinite(t.error_db)]
         if not done or not self.space.params:
             self.basins = [self.best.u.copy()] if done else []
@@ -97,8 +102,22 @@ class Search:
                 by_v[k] = t
         line = [by_v[k] for k in sorted(by_v)]
         e = [t.error_db for t in line]
-        minima = [t for i, t in enumerate(line)
-                  if (i == 0 or e[i] < e[i - 1]) and (i == len(line) - 1 or e[i] <= e[i + 1])]
+        if self.space.params[0].unit == "Hz":
+            # frequency seeds are separate hypotheses (lines the measurement points to, often mesh harmonics
+            # apart), not samples of one landscape: the best of each cluster of seeds (neighbours within
+            # SEED_CLUSTER) is a basin, minimum of the sweep or not. Measured: a housing mode between two
+            # harmonics left the seed nearer to it slightly worse at round A's coarse dampings; a chain of
+            # seeds 2 % apart at twice a torque ripple's frequency took both basins from its fundamental
+            minima, cluster = [], [line[0]]
+            for a, b in zip(line[:-1], line[1:]):
+                if self.space.params[0].from_u(b.u[0]) > SEED_CLUSTER * self.space.params[0].from_u(a.u[0]):
+                    minima.append(min(cluster, key=lambda t: t.error_db))
+                    cluster = []
+                cluster.append(b)
+            minima.append(min(cluster, key=lambda t: t.error_db))
+        else:
+            minima = [t for i, t in enumerate(line)
+                      if (i == 0 or e[i] < e[i - 1]) and (i == len(line) - 1 or e[i] <= e[i + 1])]
         minima.sort(key=lambda t: t.error_db)
         self.basins = [t.u.copy() for t in minima[:n]] or [self.best.u.copy()]
 
@@ -132,7 +151,7 @@ def round_a(s: Search, ref_residual, ref) -> list[Trial]:
     if not ps:
         return [s.point({})]
     p0 = ps[0]
-    first = frequency_seeds(ref, ref_residual, p0) if p0.unit == "Hz" else grid(p0)
+    first = between_seeds(frequency_seeds(ref, ref_residual, p0)) if p0.unit == "Hz" else grid(p0)
     first = np.unique(np.concatenate([first, s.seeds[p0.name]]))
     second = [None]
     if len(ps) > 1:
@@ -148,28 +167,38 @@ def round_a(s: Search, ref_residual, ref) -> list[Trial]:
     return out
 
 
+def between_seeds(seeds: np.ndarray, max_ratio: float = 1.5) -> np.ndarray:
+    """``seeds`` (Hz) and the geometric midpoint of every two neighbours less than ``max_ratio`` apart: a
+    resonance amplifies the lines on either side of it (two neighbouring mesh harmonics) and sits between them,
+    usually nearer neither (measured: a housing mode at 3000 Hz between harmonics at 2900 and 3383 Hz)."""
+    s = np.unique(np.asarray(seeds, float))
+    mid = [float(np.sqrt(a * b)) for a, b in zip(s[:-1], s[1:]) if b / a < max_ratio]
+    return np.unique(np.concatenate([s, mid]))
+
+
 def _primary_steps(p, best_u: float, rich: bool) -> list[float]:
-    """Values of the first parameter around the best: +/- 1 % and 3 % for a frequency, else a third and two
+    """Values of the first parameter around the best: +/- 2 % and 4 % for a frequency, else a third and two
     thirds of the grid spacing; only the best itself unless ``rich``."""
     if not rich:
         return [float(p.from_u(best_u))]
     v = float(p.from_u(best_u))
     if p.unit == "Hz":
-        return [v * f for f in (0.98, 1.0, 1.02)]
+        return [v * f for f in (0.96, 0.98, 1.0, 1.02, 1.04)]
     return [float(p.from_u(best_u + du)) for du in (-1 / 12, 0.0, 1 / 12)]
 
 
 def round_b(s: Search, rich: bool = False, best: Trial | None = None) -> list[Trial]:
-    """Second parameter's grid at the best first one (``rich``: crossed with steps of the first, for
-    time-stepped effects whose batch costs the same whatever its size); ``best``: the centre to work
-    around (default: the best trial)."""
+    """Second parameter's grid at the best first one (``rich``: 9 values instead of 5, crossed with steps of the
+    first, for time-stepped effects whose batch costs about the same whatever its size: the first parameter is
+    chosen near the second's valley, where the two trade off); ``best``: the centre to work around (default:
+    the best trial)."""
     ps, best = s.space.params, best or s.best
     if best is None:
         return []
     out = []
     if len(ps) >= 2:
         for v0 in _primary_steps(ps[0], best.u[0], rich):
-            for v in np.unique(np.concatenate([grid(ps[1], 5), s.seeds[ps[1].name]])):
+            for v in np.unique(np.concatenate([grid(ps[1], 9 if rich else 5), s.seeds[ps[1].name]])):
                 out.append(s.point({**best.values, ps[0].name: v0, ps[1].name: float(v)}))
     elif len(ps) == 1:
         step = 1.0 / (2 * 6)
@@ -207,8 +236,9 @@ def round_c(s: Search, best: Trial | None = None) -> list[Trial]:
 
 def round_fine(s: Search, best: Trial | None = None) -> list[Trial]:
     """Points along each parameter's axis through ``best`` at 1/4, 1/2 and 3/4 of the gap to the nearest value
-    already tried in its basin on either side (no side past a bound or without a tried value beyond): each
-    round cuts the bracket around the minimum to a quarter. For time-stepped effects, whose batch costs about
+    already tried in its basin on either side: each round cuts the bracket around the minimum to a quarter. A
+    side without a tried value beyond (the minimum not bracketed) gets 1/2 and 1 times the other side's gap,
+    outwards, up to the bound. For time-stepped effects, whose batch costs about
     the same for 6 or 40 cases (measured: a torque fluctuation's amplitude on the spur rig, a sharp minimum
     between the grid's 0.13 and 0.32 with the truth at 0.2; the quadratic surrogate of a sharp frequency
     minimum is unreliable there)."""
@@ -221,9 +251,16 @@ def round_fine(s: Search, best: Trial | None = None) -> list[Trial]:
         d = [float(t.u[j] - best.u[j]) for t in s.trials if s.basin_of(t) == home]
         for side in (-1.0, 1.0):
             gaps = [abs(x) for x in d if x * side > 1e-6]
+            fracs = (0.25, 0.5, 0.75)
             if not gaps:
-                continue
-            for frac in (0.25, 0.5, 0.75):
+                # the best is the last value tried on this side: not bracketed, so step outwards by the gap
+                # on the other side (measured: a speed fluctuation's frequency seeded 4 % low stopped at the
+                # top of round B's +/- 2 %)
+                gaps = [abs(x) for x in d if x * side < -1e-6]
+                fracs = (0.5, 1.0)
+                if not gaps or not 0.0 < best.u[j] + side * 1e-6 < 1.0:
+                    continue
+            for frac in fracs:
                 u = best.u.copy()
                 u[j] = np.clip(u[j] + side * frac * min(gaps), 0, 1)
                 out.append(s.point({q.name: float(q.from_u(u[i])) for i, q in enumerate(ps)}, best.choice))

@@ -83,15 +83,14 @@ class StiffnessOptions:
     output band, :func:`auto_positions_per_cycle`), ``n_slices``, ``pit_model``, ``edges`` (how a contact edge
     between positions enters the record, :func:`datagen.stiffness.contact_fraction`).
 
-    ``StiffnessOptions(positions_per_cycle=None, edges="box")`` is the accurate record (README, "Dynamics": within
-    0-7 % of a converged one where the defaults are 6-512 % off). It is not yet the default: with it five of the
-    comparison's slow end-to-end tests fail (backlash halving, the far-off drive train, the calibrated housing path,
-    the encoders' speed-fluctuation twin on two seeds), which need re-measuring first."""
+    The defaults are the accurate record: positions chosen by the band, box edges (README, "Dynamics": within
+    0-7 % of a converged record). ``StiffnessOptions(positions_per_cycle=64, edges="point")`` is the former
+    coarse record (6-512 % off), kept to reproduce datasets made before commit d1b9c53."""
 
-    positions_per_cycle: int | None = 64
+    positions_per_cycle: int | None = None
     n_slices: int | None = None
     pit_model: str = "no_contact"
-    edges: str = "point"
+    edges: str = "box"
 
     def __post_init__(self):
         from datagen.stiffness import EDGE_MODES
@@ -103,3 +102,9 @@ class StiffnessOptions:
                     and 4 <= self.positions_per_cycle <= 100000, "stiffness.positions_per_cycle",
                     self.positions_per_cycle, "an integer in [4, 100000], or \"auto\" (chosen by the output band)")
         require(self.edges in EDGE_MODES, "stiffness.edges", self.edges, f"one of: {', '.join(EDGE_MODES)}")
+
+    def to_dict(self) -> dict:
+        """The file form (``[stiffness]`` of a case or sweep): positions chosen by the band as ``"auto"``, unset
+        options left out."""
+        return {k: ("auto" if k == "positions_per_cycle" and v is None else v)
+                for k, v in vars(self).items() if v is not None or k == "positions_per_cycle"}

@@ -66,6 +66,7 @@ def build_metadata(sweep) -> dict:
 
     return {"format": "gearpit-dataset", "format_version": FORMAT_VERSION, "name": sweep.name, "seed": sweep.seed,
             "fingerprint": sweep.fingerprint, "software": software_versions(), "config": sweep.source,
+            "stiffness": sweep.stiffness.to_dict(),
             "n_samples": sweep.n_samples, "shard_size": sweep.shard_size, "n_shards": sweep.n_shards,
             "channels": list(sweep.stored_channels), "fs_hz": sweep.fs_hz, "n_time": sweep.n_time, "dtype": "float32",
             "pairs": {p.name: {"z_pinion": p.pinion.teeth, "z_wheel": p.wheel.teeth} for p in sweep.pairs},

@@ -57,7 +57,7 @@ def build_case(sweep: Sweep, spec, pit_map):
     return Case(pair=sweep.pair(spec.key.pair), operating=OperatingPoint(spec.speed_rpm, spec.torque_nm),
                 duration_s=sweep.duration_s, fs_hz=sweep.fs_hz, pits=pit_map if spec.teeth else None,
                 pit_gear=sweep.gear, pit_grid=sweep.grid_px, effects=effects, seed=spec.simulation_seed,
-                drivetrain=DriveTrain(**dict(spec.drive_train)))
+                drivetrain=DriveTrain(**dict(spec.drive_train)), stiffness=sweep.stiffness)
 
 
 def shard_samples(sweep: Sweep, shard: int) -> range:

@@ -167,8 +167,7 @@ class Case:
         """The TOML form (regenerates the case exactly, except a PitMap given as an array)."""
         d = {"duration_s": self.duration_s, "fs_hz": self.fs_hz, "seed": self.seed, "pair": self.pair.to_dict(),
              "operating": {"speed_rpm": self.operating.speed_rpm, "torque_nm": self.operating.torque_nm},
-             "stiffness": {k: ("auto" if k == "positions_per_cycle" and v is None else v)
-                          for k, v in vars(self.stiffness).items() if v is not None or k == "positions_per_cycle"},
+             "stiffness": self.stiffness.to_dict(),
              "drivetrain": self.drivetrain.to_dict(),
              "solver": {k: v for k, v in vars(self.solver).items() if v is not None},
              "effects": [e.to_dict() for e in self.effects]}

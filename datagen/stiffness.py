@@ -75,7 +75,7 @@ class MeshStiffness:
     _g_cycle: np.ndarray = field(repr=False)        # (ppc, n_slots, n_slices) contact position, NaN if none
     _k_cycle: np.ndarray = field(repr=False)        # (ppc, n_slots, n_slices) healthy slice stiffness
     _overrides: dict = field(repr=False)            # (m, slot) -> (ppc, n_slices) slice stiffness of pitted pairs
-    edges: str = "point"                            # contact edges on the grid: EDGE_MODES
+    edges: str = "box"                              # contact edges on the grid: EDGE_MODES
 
     @property
     def n_slots(self) -> int:
@@ -269,7 +269,7 @@ def cell_share(x, y) -> np.ndarray:
 
 
 def mesh_stiffness(pair, *, pits=None, positions_per_cycle: int = 64, n_slices: int | None = None,
-                   pit_model: str = "no_contact", edges: str = "point") -> MeshStiffness:
+                   pit_model: str = "no_contact", edges: str = "box") -> MeshStiffness:
     """Mesh stiffness of ``pair`` over one revolution of the pitted gear(s).
 
     Parameters

@@ -49,6 +49,10 @@ are errors)::
     [drive_train]                       # fields of datagen.lumped_model.DriveTrain
     mesh_damping_ratio = [0.03, 0.10]
 
+    [stiffness]                         # optional, fixed: datagen.case_options.StiffnessOptions
+    positions_per_cycle = "auto"        # the default (chosen by the band); 64 with edges = "point" is the
+    edges = "box"                       # record of datasets made before commit d1b9c53
+
 A value is fixed (``x``), a uniform range (``[lo, hi]``, integers for integer
 fields), a set of levels drawn with equal probability (``{choices = [600.0,
 1200.0, 1800.0]}``) or, for string options, a list of choices (``["a", "b"]``).
@@ -77,6 +81,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from pathlib import Path
 
+from datagen.case_options import StiffnessOptions
 from datagen.class_grid import SeverityBin, TeethClass, class_grid, read_severity_bins, read_teeth_classes
 from datagen.draws import Draw, is_int, read_draw, read_int, read_names, read_number
 from datagen.geometry import GearPair, preset
@@ -89,7 +94,7 @@ from gearpit.tomlio import check_keys, read_toml
 #: bump when the stored layout or the sampling rules change (recorded in metadata.json)
 FORMAT_VERSION = 1
 
-_TOP = {"sweep", "classes", "pits", "operating", "effects", "drive_train"}
+_TOP = {"sweep", "classes", "pits", "operating", "effects", "drive_train", "stiffness"}
 _SWEEP = {"name", "seed", "samples_per_class", "shard_size", "fs_hz", "duration_s", "pairs", "channels",
           "healthy_reference"}
 #: suffix of the stored channels of the healthy twins (``healthy_reference = true``)
@@ -131,6 +136,7 @@ class Sweep:
     drive_train: tuple[Draw, ...]
     source: Mapping  # the TOML document as read (recorded in metadata.json)
     healthy_reference: bool = False
+    stiffness: StiffnessOptions = StiffnessOptions()
 
     @property
     def stored_channels(self) -> tuple[str, ...]:
@@ -161,8 +167,10 @@ class Sweep:
 
     @property
     def fingerprint(self) -> str:
-        """sha256 of the canonical JSON of the TOML document and the format version."""
-        text = json.dumps({"format_version": FORMAT_VERSION, "config": self.source}, sort_keys=True)
+        """sha256 of the canonical JSON of the TOML document, the format version and the simulator's mesh record
+        (the record's default changed at stop 34: a dataset begun before must not be resumed with it)."""
+        text = json.dumps({"format_version": FORMAT_VERSION, "config": self.source,
+                           "stiffness": self.stiffness.to_dict()}, sort_keys=True)
         return hashlib.sha256(text.encode()).hexdigest()
 
 
@@ -220,6 +228,9 @@ def sweep_from_dict(doc: Mapping) -> Sweep:
     torque = read_draw(op["torque_nm"], "operating.torque_nm", "torque_nm", "N m", (1e-3, 1e6))
     effects = _effects(doc.get("effects", {}))
     drive = _drive_train(doc.get("drive_train", {}))
+    stiff = dict(_table(doc, "stiffness")) if "stiffness" in doc else {}
+    check_keys(stiff, {f.name for f in fields(StiffnessOptions)}, "stiffness")
+    stiffness = StiffnessOptions(**stiff)
     name = sw.get("name", "sweep")
     require(isinstance(name, str) and re.fullmatch(r"[A-Za-z0-9_.-]{1,64}", name) is not None, "sweep.name", name,
             "1-64 letters, digits, '_', '.', '-'")
@@ -227,7 +238,8 @@ def sweep_from_dict(doc: Mapping) -> Sweep:
                   duration_s=float(dur), pairs=pairs, channels=channels, shapes=shapes, severity_bins=bins,
                   teeth_classes=teeth, gear=gear, grid_px=(int(grid_px[0]), int(grid_px[1])), tolerance=tol,
                   depth_m=depth, aspect_w_to_s=aspect, profile=profile, speed_rpm=speed, torque_nm=torque,
-                  effects=effects, drive_train=drive, source=json.loads(json.dumps(doc)), healthy_reference=twin)
+                  effects=effects, drive_train=drive, source=json.loads(json.dumps(doc)), healthy_reference=twin,
+                  stiffness=stiffness)
     _check_feasible(sweep)
     return sweep
 

@@ -189,8 +189,8 @@ def test_subgrid_timing_shift_keeps_the_edge_ramps(name, steps):
     one-step width except at its corners, cut by at most dK / (4 q) (q = points per step), plus 0.05 dK for
     the stiffness between the edges (the healthy stiffness at the displaced grid positions, not the shifted
     interpolation; measured up to 0.07 dK together at 15/16 of a step, helical); a shift leaves the amplitude
-    spectrum unchanged (shift theorem): mesh orders 8-32 within 2 % (measured 0.8 % at most; with box edges
-    0.7 % and deviations up to 0.045 dK). On the grid
+    spectrum unchanged (shift theorem): mesh orders 8-32 within 2 % (measured 0.8 % at most; with box edges,
+    the default, 0.7 % and deviations up to 0.045 dK). On the grid
     itself (q = 1, the record before the subdivision) each moved edge spread over two steps: deviations
     0.16-0.25 dK, 26-57 % less energy in orders 8-32 at these shifts."""
     from datagen.centre_offset import SUBDIVISIONS as q
@@ -218,7 +218,7 @@ def test_small_eccentricity_keeps_the_high_mesh_harmonics(gear):
     record as the dynamics reads it: an eccentricity this small moves the start of contact by up to 0.32
     (0.95) grid steps (64 positions per cycle), the mesh timing by up to 0.07 (0.2) steps and the contact
     ratio by 0.005 (0.015), a change of the edge ramps' spectrum of order 1 %. Measured -0.3 % (+1.3 %) with
-    point-sampled edges (the default), -0.19 % (+1.42 %) with box edges (datagen.stiffness.contact_fraction);
+    point-sampled edges, -0.19 % (+1.42 %) with box edges (datagen.stiffness.contact_fraction, the default);
     with the record on the grid itself (edges spread over two steps; commit 904a59f) -13.9 % (-23.1 %).
     Tolerance 3 %."""
     from datagen.effects import EffectContext, get
@@ -243,10 +243,11 @@ def test_small_eccentricity_keeps_the_high_mesh_harmonics(gear):
 
 def test_small_eccentricity_barely_changes_the_housing_rms():
     """Housing acceleration (pinion bearing) of spur-gds at 1000 rpm, 50 N m (periodic steady state, two pinion
-    revolutions): a 10 um pinion eccentricity changes the RMS by -0.2 % (64 point-sampled positions, the default;
-    with 16 points per grid step +0.1 %; with 256 positions per cycle on the grid itself -1.0 %; with box edges
-    and the band's 512 positions -1.22 %, RMS 511 m/s^2: the finer records agree); the record on the 64-position
-    grid itself lowered it by 7.2 % (edges spread over two steps; commit 8a372fd). Tolerance 1.5 %."""
+    revolutions): a 10 um pinion eccentricity changes the RMS by -1.22 % (box edges, 512 positions per cycle
+    chosen by the band, 8 points per step; RMS 511 m/s^2). On 64 point-sampled positions it was -0.2 % (with
+    16 points per grid step +0.1 %; with 256 positions per cycle on the grid itself -1.0 %: the finer grids
+    agree); the record on the 64-position grid itself lowered it by 7.2 % (edges spread over two steps; commit
+    8a372fd). Tolerance 1.5 %."""
     from datagen.simulate import Case, OperatingPoint, simulate
 
     def rms(effects):

@@ -72,8 +72,8 @@ def sharp_valley(freq_hz: float, amp: float) -> float:
 def test_fine_ladders_close_in_on_a_minimum_between_grid_points():
     """compare.search.round_fine: a frequency (log, 1-1000 Hz) and an amplitude (log, 0.001-1), the rounds of a
     time-stepped fit (A, rich B, then two fine ladders) against sharp_valley: after the ladders the best is within
-    1 % in frequency and 10 % in amplitude of the minimum (37 Hz, 0.2); after the rich round B alone it is a grid
-    point 0.13 or 0.32 (> 35 % off). Each ladder holds at most six points per parameter, along its axis through the
+    1 % in frequency and 10 % in amplitude of the minimum (37 Hz, 0.2); after the rich round B alone it is a point
+    of its 9-value grid, 0.147 or 0.316 (> 25 % off). Each ladder holds at most six points per parameter, along its axis through the
     best, inside the bracket of the nearest values already tried on either side."""
     f = FitParameter("frequency_hz", 1.0, 1000.0, "Hz", 10.0, True)
     a = FitParameter("amplitude_fraction", 0.001, 1.0, "", 0.05, True)
@@ -89,7 +89,7 @@ def test_fine_ladders_close_in_on_a_minimum_between_grid_points():
     s.set_basins()
     run(around_basins(lambda s_, best=None: round_b(s_, rich=True, best=best), s))
     coarse = s.best.values["amplitude_fraction"]
-    assert abs(coarse / 0.2 - 1) > 0.35, coarse
+    assert abs(coarse / 0.2 - 1) > 0.25, coarse
     for _ in range(2):
         best = s.best
         below = max(t.u[1] for t in s.trials if t.u[1] < best.u[1] - 1e-6)
@@ -240,3 +240,55 @@ def test_fundamental_seed_recovers_a_modulation_whose_first_sidebands_are_weak()
     assert fundamental_seed([46.0, 92.0, 138.0]) is None                       # multiples of 46 only
     assert fundamental_seed([3150.0, 2500.0, 4000.0]) is None                  # band centres
     assert fundamental_seed([46.0]) is None
+
+
+def _frequency_search(values_errors, second=0.05):
+    """A frequency (log, 1-10000 Hz) and a second parameter; trials at the given (frequency, error) pairs."""
+    f = FitParameter("frequency_hz", 1.0, 10000.0, "Hz", 100.0, True)
+    z = FitParameter("damping_ratio", 0.001, 0.5, "", 0.05, True)
+    s = Search(None, FitSpace("stand_in", (f, z), None, False), None)
+    for v, e in values_errors:
+        t = s.point({"frequency_hz": v, "damping_ratio": second})
+        t.error_db = e
+        s.trials.append(t)
+    return s
+
+
+def test_frequency_basins_are_the_best_clusters_of_seeds_minima_or_not():
+    """compare.search.Search.set_basins on a frequency (errors measured on two rigs of the band's mesh record).
+    A housing mode at 3000 Hz: round A's best seeds were 2417 Hz (1.59 dB) and 2900 Hz (1.74 dB, no local minimum
+    of the sweep: 3383 Hz is higher still), so the old rule (local minima only) refined 2417 Hz alone; now both.
+    A chain of seeds 2 % apart at about twice a torque ripple's 22 Hz (3.1-5.3 dB) is one cluster: the second
+    basin is the fundamental (6.2 dB), not the chain's runner-up."""
+    s = _frequency_search([(1450.0, 2.95), (2416.7, 1.59), (2900.0, 1.74), (3383.3, 1.95)])
+    s.set_basins()
+    got = sorted(round(float(s.space.params[0].from_u(b[0]))) for b in s.basins)
+    assert got == [2417, 2900], got
+    s = _frequency_search([(22.08, 6.17), (43.28, 3.10), (44.16, 3.84), (45.07, 4.68), (46.00, 5.29),
+                           (117.0, 10.3), (234.0, 10.8)])
+    s.set_basins()
+    got = sorted(round(float(s.space.params[0].from_u(b[0])), 2) for b in s.basins)
+    assert got == [22.08, 43.28], got
+
+
+def test_between_seeds_adds_the_midpoints_of_close_neighbours():
+    """compare.search.between_seeds: the geometric midpoint of neighbours less than 1.5 times apart (a resonance
+    between two mesh harmonics), none between lines further apart."""
+    from compare.search import between_seeds
+
+    out = between_seeds(np.array([2900.0, 1450.0, 3383.3, 9000.0]))
+    assert np.allclose(out, sorted([1450.0, 2900.0, 3383.3, 9000.0, math.sqrt(2900.0 * 3383.3)]))
+
+
+def test_a_fine_ladder_steps_outwards_from_an_unbracketed_best():
+    """compare.search.round_fine: a best that is the highest value tried along an axis (a frequency seeded 4 % low,
+    measured on the speed-fluctuation rig) gets points beyond it, at 1/2 and 1 times the gap below; a bracketed
+    side keeps its 1/4, 1/2, 3/4 points inside the bracket."""
+    s = _frequency_search([(22.08, 4.3), (22.52, 3.3)])
+    best = s.best
+    ladder_ = [t for t in round_fine(s, best) if abs(t.u[1] - best.u[1]) < 1e-9]
+    f = sorted(float(t.values["frequency_hz"]) for t in ladder_)
+    up = [v for v in f if v > 22.52]
+    down = [v for v in f if v < 22.52]
+    assert len(up) == 2 and max(up) == pytest.approx(22.52 ** 2 / 22.08, rel=1e-6), f
+    assert len(down) == 3 and all(22.08 < v < 22.52 for v in down), f

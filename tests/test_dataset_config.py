@@ -78,6 +78,9 @@ def test_class_grid_and_counts():
     (base(operating__speed_rpm=[1150.0, 9000.0]), "fs_hz"),                               # mesh above 0.4 fs
     (base(sweep__channels=["acc_pinion_axial_m_s2"]), "sweep.channels"),                 # axial on a spur pair
     (base(drive_train={"mesh_damping_ratio": [0.05, 3.0]}), "drive_train.mesh_damping_ratio"),
+    (base(stiffness={"edges": "boxy"}), "stiffness.edges"),                               # no such record
+    (base(stiffness={"positions_per_cycle": 2}), "stiffness.positions_per_cycle"),       # too coarse
+    (base(stiffness={"positions": 64}), "stiffness.positions"),                           # unknown key
 ])
 def test_bad_config_names_the_field(doc, field):
     """Every bad sweep is an InputError naming the offending field (issue 4, "must show" 3)."""
@@ -181,3 +184,21 @@ def test_classifier_protocol_sweeps_are_valid():
     for name in ("default", "default_healthy"):
         assert sweeps[name].channels == ("acc_pinion_loa_m_s2", "dte_m")
         assert sweeps[name].source["effects"]["noise"]["channels"] == "all"
+
+
+def test_the_sweep_picks_the_mesh_record_and_its_fingerprint_holds_it():
+    """[stiffness] reaches every case (the former record, 64 point-sampled positions, reproduces datasets made before
+    commit d1b9c53); absent, the case gets the default (positions chosen by the band, box edges). The fingerprint
+    (what a resumed run must match) differs between the two records, and metadata.json records the record."""
+    from datagen.dataset import build_metadata
+    from datagen.generate import build_case
+
+    old = sweep_from_dict(base(stiffness={"positions_per_cycle": 64, "edges": "point"}))
+    new = sweep_from_dict(BASE)
+    spec = draw_sample(old, 0)
+    case_old = build_case(old, spec, build_pit_map(old, spec))
+    case_new = build_case(new, spec, build_pit_map(new, spec))
+    assert (case_old.stiffness.positions_per_cycle, case_old.stiffness.edges) == (64, "point")
+    assert (case_new.stiffness.positions_per_cycle, case_new.stiffness.edges) == (None, "box")
+    assert old.fingerprint != new.fingerprint
+    assert build_metadata(new)["stiffness"]["positions_per_cycle"] == "auto"

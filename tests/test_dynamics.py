@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from datagen import dynamics, newmark
+from datagen import newmark
 from datagen.decimation import resample_periodic
 from datagen.geometry import helical_pair_example, spur_pair_example
 from datagen.lumped_model import DriveTrain, build_model
@@ -200,19 +200,17 @@ def test_newmark_matches_radau_on_mesh_harmonics():
     mesh-force harmonics 1-5 of f_m within 1 %.
 
     The Radau reference (rtol 1e-8) finds its own periodic state (own monodromy over one mesh period,
-    the record's period for a healthy pair). The case uses the accurate record (box edges, positions chosen by
-    the band: 512; the step then spans at most one position). On the default record (64 point-sampled
+    the record's period for a healthy pair). The case uses the default record (box edges, positions chosen by
+    the band: 512; the step then spans at most one position). On the former record (64 point-sampled
     positions) harmonic 4, the weakest (0.4 % of the strongest), is 3.3 % off and the others within 0.3 %:
     the step samples the point edges' ramps.
     """
-    from datagen.case_options import StiffnessOptions
-
     rpm = 1500.0
     fm = SPUR.mesh_frequency_hz(rpm)
     fs = 64 * fm
     # the reference reads the mesh at the nominal rotation (a linear time-varying system): so does the case
     case = Case(pair=SPUR, operating=OperatingPoint(rpm, TORQUE), duration_s=60 / rpm, fs_hz=fs,
-                solver=SolverOptions(mesh_angle="nominal"), stiffness=StiffnessOptions(positions_per_cycle=None, edges="box"))
+                solver=SolverOptions(mesh_angle="nominal"))
     sig = simulate([case])[0]
     dc = prepare(case)
     x_s = SPUR.pinion.teeth * dc.model.static_deflection()[dc.model.index("phi_1")] / (2 * np.pi)
@@ -406,12 +404,12 @@ def test_an_angle_that_does_not_settle_keeps_the_nominal_solution(monkeypatch):
                                atol=1e-9 * np.abs(nominal.channels["mesh_force_n"]).max())
 
 
-def test_the_band_chosen_box_record_converges_where_the_default_record_does_not():
+def test_the_default_band_chosen_box_record_converges_where_the_former_record_does_not():
     """The mesh record's resolution (datagen.stiffness.contact_fraction, datagen.case_options.auto_positions_per_cycle).
     Source: convergence to a fine record (2048 box positions, omega_max dt 0.03, periodic path), healthy spur-gds
-    at 600 rpm, 50 N m, 12.8 kHz, pinion-bearing acceleration, RMS of the difference. Measured: the default
-    record (64 point-sampled positions) 63 %, 64 box positions 36 %, the band's choice (512 box positions) 0.6 %.
-    Asserted: the band's box record within 3 %, the default record more than 30 % off."""
+    at 600 rpm, 50 N m, 12.8 kHz, pinion-bearing acceleration, RMS of the difference. Measured: the former default
+    record (64 point-sampled positions) 63 %, 64 box positions 36 %, the band's choice (512 box positions, the
+    default since stop 34) 0.6 %. Asserted: the default record within 3 %, the former more than 30 % off."""
     from datagen.case_options import StiffnessOptions
 
     def acc(stiffness, omega_dt=0.3):
@@ -424,5 +422,5 @@ def test_the_band_chosen_box_record_converges_where_the_default_record_does_not(
     def err(x):
         return float(np.sqrt(np.mean((x - ref) ** 2) / np.mean(ref ** 2)))
 
-    assert err(acc(StiffnessOptions(positions_per_cycle=None, edges="box"))) <= 0.03
-    assert err(acc(StiffnessOptions())) > 0.30
+    assert err(acc(StiffnessOptions())) <= 0.03
+    assert err(acc(StiffnessOptions(positions_per_cycle=64, edges="point"))) > 0.30
