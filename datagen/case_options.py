@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 from datagen import dynamics
 from datagen.decimation import PASS_EDGE as PASS_FRACTION   # the output's flat band / fs
 from gearpit.errors import require, require_positive, require_range
+from gearpit.tomlio import check_keys
 
 
 @dataclass(frozen=True)
@@ -108,3 +109,11 @@ class StiffnessOptions:
         options left out."""
         return {k: ("auto" if k == "positions_per_cycle" and v is None else v)
                 for k, v in vars(self).items() if v is not None or k == "positions_per_cycle"}
+
+
+def options_from_table(klass, table, name: str):
+    """``klass`` (:class:`StiffnessOptions` or :class:`SolverOptions`) from its file table ``[name]`` of a case
+    or sweep; an unknown key names the table and the allowed keys."""
+    require(isinstance(table, dict), name, table, "a table")
+    check_keys(table, {f.name for f in fields(klass)}, name)
+    return klass(**table)

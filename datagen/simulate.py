@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Sequence
 
@@ -47,7 +47,7 @@ from datagen.pair_file import pair_from_dict
 from datagen.lumped_model import DriveTrain, build_model
 from datagen.case_options import PASS_FRACTION as _PASS
 from datagen.case_options import (OperatingPoint, SolverOptions, StiffnessOptions,  # noqa: F401  (re-exported)
-                                  auto_positions_per_cycle)
+                                  auto_positions_per_cycle, options_from_table)
 from datagen.mesh_excitation import mesh_record
 from gearpit import __version__
 from gearpit.errors import require, require_positive
@@ -149,9 +149,7 @@ class Case:
             kwargs["pits"] = PitSpec.from_dict(p)
         for key, klass in (("stiffness", StiffnessOptions), ("solver", SolverOptions)):
             if key in d:
-                t = d[key]
-                check_keys(t, {f.name for f in fields(klass)}, key)
-                kwargs[key] = klass(**t)
+                kwargs[key] = options_from_table(klass, d[key], key)
         if "drivetrain" in d:
             kwargs["drivetrain"] = DriveTrain.from_dict(d["drivetrain"])
         if "effects" in d:

@@ -81,7 +81,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from pathlib import Path
 
-from datagen.case_options import StiffnessOptions
+from datagen.case_options import StiffnessOptions, options_from_table
 from datagen.class_grid import SeverityBin, TeethClass, class_grid, read_severity_bins, read_teeth_classes
 from datagen.draws import Draw, is_int, read_draw, read_int, read_names, read_number
 from datagen.geometry import GearPair, preset
@@ -228,9 +228,8 @@ def sweep_from_dict(doc: Mapping) -> Sweep:
     torque = read_draw(op["torque_nm"], "operating.torque_nm", "torque_nm", "N m", (1e-3, 1e6))
     effects = _effects(doc.get("effects", {}))
     drive = _drive_train(doc.get("drive_train", {}))
-    stiff = dict(_table(doc, "stiffness")) if "stiffness" in doc else {}
-    check_keys(stiff, {f.name for f in fields(StiffnessOptions)}, "stiffness")
-    stiffness = StiffnessOptions(**stiff)
+    stiffness = options_from_table(StiffnessOptions, dict(_table(doc, "stiffness")), "stiffness") \
+        if "stiffness" in doc else StiffnessOptions()
     name = sw.get("name", "sweep")
     require(isinstance(name, str) and re.fullmatch(r"[A-Za-z0-9_.-]{1,64}", name) is not None, "sweep.name", name,
             "1-64 letters, digits, '_', '.', '-'")

@@ -61,20 +61,25 @@ def log(msg: str) -> None:
 # ------------------------------------------------------------------ data
 
 
-def dataset(name: str, data_dir: Path, channel: str | None = None) -> SignalSet:
+def dataset(name: str, data_dir: Path, channel: str | None = None, stiffness: dict | None = None) -> SignalSet:
     """Damaged + healthy records of sweep ``name`` (generated once, then read); ``channel``: a stored
-    channel other than the first (experiments/sensor_protocol.py)."""
+    channel other than the first (experiments/sensor_protocol.py); ``stiffness``: a ``[stiffness]`` table that
+    replaces the sweep's mesh record (experiments/record_check.py)."""
     from datagen.dataset import read_metadata
     from datagen.generate import generate
-    from datagen.sweep import load_sweep
+    from datagen.sweep import sweep_from_dict
+    from gearpit.tomlio import read_toml
 
     parts = []
     for part in (name, f"{name}_healthy"):
         out = data_dir / part
         meta_ok = (out / "index.parquet").is_file()
         if not meta_ok:
-            log(f"generating {part}")
-            generate(load_sweep(SWEEPS / f"{part}.toml"), out, progress=False)
+            doc = dict(read_toml(SWEEPS / f"{part}.toml"))
+            if stiffness is not None:
+                doc["stiffness"] = stiffness
+            log(f"generating {part}" + ("" if stiffness is None else f" with [stiffness] {stiffness}"))
+            generate(sweep_from_dict(doc), out, progress=False)
         read_metadata(out)
         parts.append(load_dataset(out, channel=channel))
     d = concat(parts)

@@ -19,11 +19,6 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 import classifier_runs as cr  # noqa: E402  (experiments/classifier_runs.py)
-from datagen.generate import generate  # noqa: E402
-from datagen.sweep import sweep_from_dict  # noqa: E402
-from gearpit.tomlio import read_toml  # noqa: E402
-from models.data import SignalSet, concat  # noqa: E402
-from models.sources import load_dataset  # noqa: E402
 from models.train import stratified_split  # noqa: E402
 
 OUT = ROOT / "experiments" / "out" / "record_check"
@@ -36,20 +31,6 @@ def _slug(record: str) -> str:
     return record.split()[0]
 
 
-def record_dataset(record: str) -> SignalSet:
-    parts = []
-    for part in ("default", "default_healthy"):
-        out = OUT / _slug(record) / part
-        if not (out / "index.parquet").is_file():
-            doc = dict(read_toml(cr.SWEEPS / f"{part}.toml"))
-            doc["stiffness"] = RECORDS[record]
-            cr.log(f"generating {part} on the {record} record")
-            generate(sweep_from_dict(doc), out, progress=False)
-        parts.append(load_dataset(out))
-    d = concat(parts)
-    return SignalSet(d.signals, d.fs_hz, d.pair, d.labels, source=f"default ({record})", channel=d.channel)
-
-
 def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--jobs", type=int, default=1, help="processes for the feature tables")
@@ -59,7 +40,7 @@ def main(argv=None) -> dict:
     t0 = time.perf_counter()
     rows = {}
     for record in RECORDS:
-        data = record_dataset(record)
+        data = cr.dataset("default", OUT / _slug(record), stiffness=RECORDS[record])
         x, names, cfg = cr.features(f"default_{_slug(record)}", data, args.jobs)
         tr, te = stratified_split(cr.strata(data), 0.3, cr.SEED)
         train, test = data.subset(tr), data.subset(te)

@@ -62,6 +62,8 @@ def test_case_file_round_trip_regenerates_identical_signals(tmp_path):
     (lambda t: t + "[drivetrain]\nmesh_damping_ratio = -0.05\n", "drivetrain.mesh_damping_ratio"),
     (lambda t: t.replace("seed = 3", "seed = 3\nspeed = 4"), "speed"),                      # unknown key
     (lambda t: t.replace("omega_dt = 0.3", "omega_dt = 3.0"), "solver.omega_dt"),
+    (lambda t: t + "[stiffness]\nedges = \"boxy\"\n", "stiffness.edges"),
+    (lambda t: t + "[stiffness]\npositions = 64\n", "stiffness.positions"),               # unknown key
 ])
 def test_bad_case_files_raise_input_error_naming_the_field(tmp_path, edit, field):
     """Bad input is refused before any work, the message names the field."""
