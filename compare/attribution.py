@@ -26,6 +26,7 @@ are fitted at the calibrated nuisances without refit.
 from __future__ import annotations
 
 import math
+import os
 import pickle
 import time
 
@@ -111,7 +112,10 @@ def attribute(ref: Reference, model, baseline_residual: np.ndarray, *, candidate
         import multiprocessing as mp
 
         groups = transient_groups(transient)
-        executor = cf.ProcessPoolExecutor(max_workers=len(groups), mp_context=mp.get_context("fork"))
+        # at most one worker per core beside this process's periodic fits (a model that is time-stepped itself
+        # makes every candidate a group)
+        workers = min(len(groups), max(2, os.cpu_count() or 2))
+        executor = cf.ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("fork"))
         # the arguments pickled here, before the periodic fits below start: the executor pickles a submitted
         # call in a feeder thread, and the periodic fits fill cached properties of objects the arguments hold
         # (the gear pair's geometry), so pickling them there raced with this thread ("dictionary changed size
@@ -204,8 +208,7 @@ def _confirm_on_record(results: list, ref: Reference, model, settings: Attributi
     todo = [c for c in results if c.window != whole and c.status == "fitted" and c.reduction >= settings.claim_reduction]
     if not todo:
         return 0
-    solver = {"omega_dt": settings.transient_omega_dt, "transient_s": settings.transient_startup_s,
-              "method": "transient"}
+    solver = settings.search_solver(transient=True)
     options = [[c.params] + list(c.runners_up) for c in todo]
     extra = [()] + [(EffectSpec.from_dict({"name": c.effect, **p}).build(),) for c, ps in zip(todo, options) for p in ps]
     try:
@@ -301,7 +304,7 @@ def _refine_nuisances(results: list, ref: Reference, model, calibration, setting
 
     cs = CalibrationSettings(parameters=tuple(calibration.values), widths_u=tuple(settings.refine_widths_u),
                              points_per_side=tuple(settings.refine_points), seed=settings.seed)
-    periodic = {"method": "periodic"}
+    periodic = settings.search_solver(transient=False)
     ranked = sorted((c for c in results if c.status == "fitted" and math.isfinite(c.raw_error_db)),
                     key=lambda c: c.raw_error_db)[:settings.refine_top]
     if not ranked:

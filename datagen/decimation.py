@@ -6,7 +6,7 @@ flat to ``0.40 fs``, -6 dB at ``0.45 fs``, at least 80 dB down from ``0.5 fs``
 (delay compensated, so zero phase):
 
 - time-stepped records are filtered and decimated by an integer factor ``R``
-  chunk by chunk (:class:`FirDecimator`, polyphase via :func:`scipy.signal.upfirdn`);
+  chunk by chunk (:class:`FirDecimator`, polyphase as one matrix product per chunk);
 - periodic steady states (one period of ``N`` samples) are filtered in the
   frequency domain with the same FIR's gain at their harmonics, then evaluated
   at the output instants by band-limited (Fourier) upsampling and 4-point
@@ -54,12 +54,23 @@ def _gain_at_harmonics(n_bins: int, period_s: float, fs_hz: float) -> np.ndarray
     return antialias_gain(np.arange(n_bins) / period_s, fs_hz)
 
 
+#: working memory of one :meth:`FirDecimator.push` block (bytes); wider batches are taken in column blocks
+DECIMATION_BLOCK_BYTES = 32e6
+
+
 class FirDecimator:
     """Chunked, delay-compensated FIR decimation by ``R`` of many channels at once.
 
     Feed fine-rate samples starting ``delay`` samples *before* the first output
     instant; each output ``k`` is the filtered value at fine sample
     ``delay + k R`` of the fed stream.
+
+    Polyphase as a matrix product: the taps, padded to ``M = 2 HALF_TAPS_OUT + 1``
+    blocks of ``R``, times the stream cut into frames of ``R`` samples gives each
+    frame's contribution to the ``M`` outputs it reaches (one BLAS product), and
+    output ``k`` sums frame ``k + m``'s contribution ``m``. Equal to
+    :func:`scipy.signal.upfirdn` to 3e-15 of the largest output; 1.4x (R = 4) to
+    7x (R = 25) faster on 220 columns (tests/test_dynamics.py).
     """
 
     def __init__(self, R: int):
@@ -67,6 +78,10 @@ class FirDecimator:
         self.h = antialias_fir(R)
         self.delay = HALF_TAPS_OUT * R
         self.buf = None
+        M = 2 * HALF_TAPS_OUT + 1
+        taps = np.zeros(M * R)
+        taps[:self.h.size] = self.h
+        self.blocks = taps.reshape(M, R)
 
     def push(self, x: np.ndarray) -> np.ndarray:
         """Add samples (L, Q); return the outputs (K, Q) that are now complete."""
@@ -76,11 +91,29 @@ class FirDecimator:
         if n_out <= 0:
             self.buf = buf
             return np.empty((0,) + buf.shape[1:])
-        used = (n_out - 1) * R + 2 * D + 1
-        y = scipy.signal.upfirdn(self.h, buf[:used], up=1, down=R, axis=0)
-        out = y[2 * HALF_TAPS_OUT: 2 * HALF_TAPS_OUT + n_out]
         self.buf = buf[n_out * R:]
-        return out
+        return self._filter(buf, n_out)
+
+    def _filter(self, buf: np.ndarray, n_out: int) -> np.ndarray:
+        """``out[k] = sum_i h[i] buf[k R + i]`` (the taps are symmetric: the delay-compensated convolution)."""
+        R = self.R
+        M = self.blocks.shape[0]
+        F = n_out + M - 1
+        need = F * R                      # the padded taps reach R - 1 samples past the last used one
+        if buf.shape[0] < need:
+            buf = np.concatenate([buf, np.zeros((need - buf.shape[0],) + buf.shape[1:])])
+        frames = buf[:need].reshape((F, R) + buf.shape[1:])
+        flat = frames.reshape(F, R, -1)
+        Q = flat.shape[2]
+        out = np.empty((n_out, Q))
+        step = max(1, int(DECIMATION_BLOCK_BYTES // (8 * F * M)))
+        for q0 in range(0, Q, step):
+            Z = np.einsum("frq,mr->fmq", flat[:, :, q0:q0 + step], self.blocks, optimize=True)   # (F, M, q)
+            o = Z[0:n_out, 0].copy()
+            for m in range(1, M):
+                o += Z[m:m + n_out, m]
+            out[:, q0:q0 + step] = o
+        return out.reshape((n_out,) + buf.shape[1:])
 
 
 def _lagrange_weights(pos: np.ndarray, M: int, points: int = 6) -> tuple[np.ndarray, np.ndarray]:

@@ -43,6 +43,8 @@ from datagen.mesh_excitation import MeshRecord
 METHODS = ("auto", "periodic", "transient")
 #: where the mesh is read: the pinion's actual angle or its nominal rotation (datagen.simulate.SolverOptions)
 MESH_ANGLES = ("dynamic", "nominal")
+#: what bounds the time step: omega_max dt and the mesh record's positions, or omega_max dt alone (DynamicCase.dt_max)
+STEP_LIMITS = ("position", "omega_dt")
 #: decay of the start-up transient before the kept record starts
 TRANSIENT_DECAY = math.log(1000.0)
 #: time steps per chunk in the transient path
@@ -71,6 +73,7 @@ class DynamicCase:
     method: str = "auto"
     transient_s: float | None = None
     mesh_angle: str = "dynamic"
+    step_limit: str = "position"
 
     @property
     def n_out(self) -> int:
@@ -97,9 +100,10 @@ class DynamicCase:
         helical-dct, 600 / 1800 / 3000 rpm, 51.2 kHz, positions chosen by the band): with one position per step
         0.1 / 0.3 / 0.3 % and 5.9 / 0.3 / 0.4 %, without the limit 1.9 / 2.8 / 0.9 % and 9.6 / 2.9 / 1.1 %
         (1.0-1.6x the time); at 12.8 kHz the limit does not bind. Only for box edges: a point-sampled record's
-        edges are a position late anyway, and its cases keep their former step."""
+        edges are a position late anyway, and its cases keep their former step. ``step_limit="omega_dt"``:
+        ``omega_dt`` alone."""
         dt = self.model.time_step_s(self.omega_dt)
-        if self.record.edges != "box":
+        if self.record.edges != "box" or self.step_limit == "omega_dt":
             return dt
         return min(dt, POSITIONS_PER_STEP / (self.mesh_hz * self.record.positions_per_cycle))
 

@@ -213,16 +213,13 @@ def test_a_window_fit_is_claimed_only_if_it_holds_on_the_whole_record():
         assert c.baseline_error_db == pytest.approx(compare(m, model, reference=ref).error_db["total"], abs=0.35)
 
 
-def test_time_stepped_candidates_split_by_contact_law():
-    """compare.fitting.transient_groups: the effect with a nonlinear mesh law (backlash: contact loss, the slow
-    batch) is fitted apart from the fluctuations, which stay together (a batch costs about the same for one case or
-    many); a single kind gives a single group, and no name is lost or repeated."""
+def test_time_stepped_candidates_are_fitted_one_effect_per_process():
+    """compare.fitting.transient_groups: each time-stepped effect is its own group (a batch's cost grows with its
+    cases and every case waits for the slowest), in the given order, no name lost or repeated."""
     from compare.fitting import transient_groups
 
     groups = transient_groups(["speed_fluctuation", "backlash", "torque_fluctuation"])
-    assert groups == [["backlash"], ["speed_fluctuation", "torque_fluctuation"]]
-    assert transient_groups(["torque_fluctuation", "speed_fluctuation"]) == [["torque_fluctuation", "speed_fluctuation"]]
-    assert transient_groups(["backlash"]) == [["backlash"]]
+    assert groups == [["speed_fluctuation"], ["backlash"], ["torque_fluctuation"]]
     assert transient_groups([]) == []
 
 

@@ -424,3 +424,25 @@ def test_the_default_band_chosen_box_record_converges_where_the_former_record_do
 
     assert err(acc(StiffnessOptions())) <= 0.03
     assert err(acc(StiffnessOptions(positions_per_cycle=64, edges="point"))) > 0.30
+
+
+@pytest.mark.parametrize("R", [2, 7, 12])
+def test_chunked_decimation_equals_scipy_upfirdn_on_the_whole_stream(R, monkeypatch):
+    """datagen.decimation.FirDecimator against an independent reference, scipy.signal.upfirdn over the whole
+    stream at once (delay-compensated: output k is the filtered value at fine sample delay + k R): fed in uneven
+    chunks, with the columns taken in blocks of a few (a small working-memory budget), equal to 1e-12 of the
+    largest output."""
+    import scipy.signal
+
+    from datagen import decimation
+
+    monkeypatch.setattr(decimation, "DECIMATION_BLOCK_BYTES", 8 * 3 * (200 + 53) * 53)   # ~3 columns a block
+    rng = np.random.default_rng(5)
+    x = rng.standard_normal((40 * R + 2 * decimation.HALF_TAPS_OUT * R + 3 * R + 1, 2, 5))
+    d = decimation.FirDecimator(R)
+    cuts = np.sort(rng.choice(np.arange(1, x.shape[0]), 6, replace=False))
+    got = np.concatenate([d.push(part) for part in np.split(x, cuts)])
+    full = scipy.signal.upfirdn(decimation.antialias_fir(R), x, up=1, down=R, axis=0)
+    want = full[2 * decimation.HALF_TAPS_OUT: 2 * decimation.HALF_TAPS_OUT + got.shape[0]]
+    assert got.shape[0] == (x.shape[0] - 1 - 2 * d.delay) // R + 1 and got.shape[1:] == (2, 5)
+    assert np.max(np.abs(got - want)) < 1e-12 * np.max(np.abs(want))
