@@ -102,6 +102,37 @@ def test_fine_ladders_close_in_on_a_minimum_between_grid_points():
     assert abs(best["frequency_hz"] / 37.0 - 1) < 0.01 and abs(best["amplitude_fraction"] / 0.2 - 1) < 0.10, best
 
 
+def test_frequency_steps_follow_the_valley_of_the_second_parameter():
+    """compare.search.round_b_frequency after a rich round B, against sharp_valley with the frequency seed 3 %
+    off its minimum (38.15 Hz for 37.0): the steps (+/-2 and 4 %) are taken at the best amplitude of the nine and
+    its two neighbours only (12 points, none repeated), and move the best to a step next to the minimum
+    (36.62 Hz, 1.03 % off; 37.39 Hz is 1.05 % off)."""
+    from compare.search import FREQUENCY_STEPS, round_b_frequency
+
+    f = FitParameter("frequency_hz", 1.0, 1000.0, "Hz", 10.0, True)
+    a = FitParameter("amplitude_fraction", 0.001, 1.0, "", 0.05, True)
+    s = Search(None, FitSpace("stand_in", (f, a), None, True), None)
+    s.seeds = {"frequency_hz": np.array([38.15]), "amplitude_fraction": np.array([])}
+
+    def run(trials):
+        for t in trials:
+            t.error_db = sharp_valley(t.values["frequency_hz"], t.values["amplitude_fraction"])
+            s.trials.append(t)
+
+    run([s.point({"frequency_hz": 38.15, "amplitude_fraction": v}) for v in a.from_u((np.arange(3) + 0.5) / 3)])
+    s.set_basins()
+    run(around_basins(lambda s_, best=None: round_b(s_, rich=True, best=best), s))
+    assert {round(t.values["frequency_hz"], 6) for t in s.trials} == {38.15}      # a frequency is not crossed
+    centre = s.best
+    steps = round_b_frequency(s)
+    amps = sorted({round(t.values["amplitude_fraction"], 9) for t in steps})
+    assert len(steps) == len(FREQUENCY_STEPS) * 3 and len(amps) == 3
+    assert round(centre.values["amplitude_fraction"], 9) == amps[1]
+    run(steps)
+    assert abs(s.best.values["frequency_hz"] / 37.0 - 1) < 0.011 and s.best.error_db < centre.error_db - 5
+    assert round_b_frequency(s, best=centre) == []          # every step already tried
+
+
 def test_distinct_runners_up_of_a_ragged_window_fit():
     """compare.fitting._distinct_best: the best trial and the next best ones at least 0.03 apart in the search
     coordinate (a ragged surface: two trials 0.01 apart count once)."""
