@@ -40,9 +40,9 @@ class SolverOptions:
     model, ``k(t)`` fixed in advance). Both solution paths honour it (:mod:`datagen.shooting`).
     ``step_limit``: "position" (the step spans at most one position of a box-edged mesh record as well,
     :attr:`datagen.dynamics.DynamicCase.dt_max`) or "omega_dt" (``omega_dt`` alone: on the periodic path up to 6x
-    faster at 20 kHz and above, the comparison views of the 20 kHz test rig within 0.01 dB, the attribution's
-    periodic search uses it; on the time-stepped path a step that straddles box edges modulates the mesh,
-    compare.candidates.AttributionSettings)."""
+    faster at 20 kHz and above for records that repeat once per wheel revolution, but less accurate - the fits of
+    the attribution moved, compare.candidates.AttributionSettings.periodic_step_limit; on the time-stepped path a
+    step that straddles box edges modulates the mesh)."""
 
     omega_dt: float = 0.3
     method: str = "auto"
