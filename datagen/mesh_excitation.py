@@ -39,6 +39,7 @@ class MeshRecord:
     k_slots: np.ndarray
     e_slots: np.ndarray
     edges: str = "point"            # the stiffness record's contact edges (datagen.stiffness.contact_fraction)
+    subdivisions: int = 1           # record points per stiffness-record position (hook 2c refines by SUBDIVISIONS)
 
     @property
     def n_pos(self) -> int:
@@ -112,7 +113,7 @@ def mesh_record(stiffness, effects, ctx) -> MeshRecord:
     P_min = minimal_period(P, ppc * q, k, E)
     n = P_min * ppc * q
     return MeshRecord(period_cycles=P_min, positions_per_cycle=ppc * q, k=k[:n], error_force=E[:n], k_slots=k_slots[:n],
-                      e_slots=e_slots[:n], edges=stiffness.edges)
+                      e_slots=e_slots[:n], edges=stiffness.edges, subdivisions=q)
 
 
 def minimal_period(P: int, ppc: int, *arrays: np.ndarray, rtol: float = 1e-12) -> int:
