@@ -41,7 +41,7 @@ class SolverOptions:
     ``step_limit``: "position" (the step spans at most one position of a box-edged mesh record as well,
     :attr:`datagen.dynamics.DynamicCase.dt_max`) or "omega_dt" (``omega_dt`` alone: on the periodic path up to 6x
     faster at 20 kHz and above for records that repeat once per wheel revolution, but less accurate - the fits of
-    the attribution moved, compare.candidates.AttributionSettings.periodic_step_limit; on the time-stepped path a
+    the attribution moved, compare.candidates.AttributionSettings.search_solver; on the time-stepped path a
     step that straddles box edges modulates the mesh)."""
 
     omega_dt: float = 0.3

@@ -102,8 +102,7 @@ class FirDecimator:
         need = F * R                      # the padded taps reach R - 1 samples past the last used one
         if buf.shape[0] < need:
             buf = np.concatenate([buf, np.zeros((need - buf.shape[0],) + buf.shape[1:])])
-        frames = buf[:need].reshape((F, R) + buf.shape[1:])
-        flat = frames.reshape(F, R, -1)
+        flat = buf[:need].reshape(F, R, -1)
         Q = flat.shape[2]
         out = np.empty((n_out, Q))
         step = max(1, int(DECIMATION_BLOCK_BYTES // (8 * F * M)))
