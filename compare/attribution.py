@@ -106,40 +106,24 @@ def attribute(ref: Reference, model, baseline_residual: np.ndarray, *, candidate
     results, n_sims, seconds = [], 0, {}
     args = (ref, model, settings)
     tail = (list(disagreements), n_eff, np.asarray(baseline_residual))
-    futures = []
-    if transient and parallel:
-        import concurrent.futures as cf
-        import multiprocessing as mp
-
-        groups = transient_groups(transient)
-        # at most one worker per core beside this process's periodic fits (a model that is time-stepped itself
-        # makes every candidate a group)
-        workers = min(len(groups), max(2, os.cpu_count() or 2))
-        executor = cf.ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("fork"))
-        # the arguments pickled here, before the periodic fits below start: the executor pickles a submitted
-        # call in a feeder thread, and the periodic fits fill cached properties of objects the arguments hold
-        # (the gear pair's geometry), so pickling them there raced with this thread ("dictionary changed size
-        # during iteration", seen on the foreign rig's loop)
-        payload = pickle.dumps((args, tail))
-        futures = [executor.submit(_search_and_confirm_payload, g, payload) for g in groups]
-    elif transient:
-        r, n, seconds["time_stepped"] = _search_and_confirm(transient, *args, *tail)
+    refit = bool(periodic) and calibration is not None and settings.refine_top > 0
+    if parallel and pool:
+        r, n = _fit_in_workers(transient, periodic, args, tail, calibration if refit else None, seconds)
         results += r
         n_sims += n
-    if periodic:
-        r, n, seconds["periodic"] = search_group(periodic, *args, False, *tail)
-        if calibration is not None and settings.refine_top > 0:
-            t1 = time.perf_counter()
-            n += _refine_nuisances(r, ref, model, calibration, settings, list(disagreements))
-            seconds["nuisance_refit"] = time.perf_counter() - t1
-        results += r
-        n_sims += n
-    for i, f in enumerate(futures):
-        r, n, seconds[f"time_stepped_{i + 1}"] = f.result()
-        results += r
-        n_sims += n
-    if futures:
-        executor.shutdown()
+    else:
+        if transient:
+            r, n, seconds["time_stepped"] = _search_and_confirm(transient, *args, *tail)
+            results += r
+            n_sims += n
+        if periodic:
+            r, n, seconds["periodic"] = search_group(periodic, *args, False, *tail)
+            if refit:
+                t1 = time.perf_counter()
+                n += _refine_nuisances(r, ref, model, calibration, settings, list(disagreements))
+                seconds["nuisance_refit"] = time.perf_counter() - t1
+            results += r
+            n_sims += n
     if calibration is not None:     # the drive train each candidate was fitted at (refitted ones keep theirs)
         for c in results:
             c.nuisance = c.nuisance or dict(calibration.values)
@@ -151,6 +135,62 @@ def attribute(ref: Reference, model, baseline_residual: np.ndarray, *, candidate
     claimed = choose_claim(results, settings)
     return Attribution(candidates=results, unexplained=unexplained_of(results, disagreements, settings), elapsed_s=time.perf_counter() - t0,
                        n_simulations=n_sims, group_seconds=seconds, rivals=rivals_of(claimed, results, settings))
+
+
+def _search_payload(names_: list, payload: bytes):
+    """:func:`compare.fitting.search_group` of the periodic effects ``names_`` in a worker process."""
+    args, tail = pickle.loads(payload)
+    return search_group(names_, *args, False, *tail)
+
+
+def _fit_in_workers(transient: list, periodic: list, args: tuple, tail: tuple, calibration, seconds: dict):
+    """Fit every candidate in a pool of worker processes, one per core (this process waits): each
+    :func:`transient_groups` group is one job (searched on a window, confirmed on the record), each periodic
+    effect another, then the nuisance refit of the leading periodic ones (``calibration`` given,
+    :func:`_refine_nuisances`: the baseline's refit is queued before the periodic jobs, the candidates' after
+    them, since the ranking needs them all). Returns (results, n_simulations); ``seconds`` gets each job's wall time.
+
+    Why one job per periodic effect and none in this process: the longest jobs go first and the pool hands out
+    the rest as cores free up, so neither core idles while the other finishes. Measured on the escalated default
+    path of ``experiments/bench_compare.py`` (2 cores, idle): with the periodic effects searched together in
+    this process and the refit after them, the calibrated pass took 29.4 s of which the second core idled about a
+    third. Each periodic effect is now searched with its own baseline in its batch; since the solver gives every
+    case of a batch the same steps per mesh cycle (:func:`datagen.dynamics._merge_step_counts`), that baseline's
+    error can differ from the one of a joint batch, by 5e-5 dB on that rig (reductions by 6e-4).
+    """
+    import concurrent.futures as cf
+    import multiprocessing as mp
+
+    ref, model, settings = args
+    disagreements = tail[0]
+    executor = cf.ProcessPoolExecutor(max_workers=max(2, os.cpu_count() or 2), mp_context=mp.get_context("fork"))
+    try:
+        # the arguments pickled here, in this thread: the executor pickles a submitted call in a feeder thread,
+        # and a search fills cached properties of objects the arguments hold (the gear pair's geometry), so
+        # pickling them there raced with this thread ("dictionary changed size during iteration", seen on the
+        # foreign rig's loop, when the periodic fits ran in this process)
+        payload = pickle.dumps((args, tail))
+        stepped = [executor.submit(_search_and_confirm_payload, g, payload) for g in transient_groups(transient)]
+        null_refit = (executor.submit(_calibrate_payload, _refit_payload(ref, model, calibration, settings))
+                      if calibration is not None else None)
+        jobs = [(n, executor.submit(_search_payload, [n], payload)) for n in periodic]
+        results, n_sims = [], 0
+        for name, f in jobs:
+            r, n, seconds[f"periodic:{name}"] = f.result()
+            results += r
+            n_sims += n
+        if calibration is not None:
+            t1 = time.perf_counter()
+            n_sims += _refine_nuisances(results, ref, model, calibration, settings, list(disagreements),
+                                        executor=executor, null_refit=null_refit)
+            seconds["nuisance_refit"] = time.perf_counter() - t1
+        for i, f in enumerate(stepped):
+            r, n, seconds[f"time_stepped_{i + 1}"] = f.result()
+            results += r
+            n_sims += n
+    finally:
+        executor.shutdown(cancel_futures=True)
+    return results, n_sims
 
 
 def long_period_candidates(names_: list, ref: Reference, model) -> list:
@@ -278,8 +318,34 @@ def _profile_nonlinear(c: CandidateResult, ev, ref: Reference, model, settings: 
     return evaluate(ref, y, ref.fs_hz, seed=settings.seed, ensemble=others).residuals, n + 1 + len(others)
 
 
+def _refit_settings(calibration, settings: AttributionSettings):
+    """The :class:`compare.calibration.CalibrationSettings` of the nuisance refit (:func:`_refine_nuisances`)."""
+    from compare.calibration import CalibrationSettings
+
+    return CalibrationSettings(parameters=tuple(calibration.values), widths_u=tuple(settings.refine_widths_u),
+                               points_per_side=tuple(settings.refine_points), seed=settings.seed)
+
+
+def _refit_payload(ref: Reference, model, calibration, settings: AttributionSettings, start: dict | None = None,
+                   effect=None) -> bytes:
+    """One refit of :func:`_refine_nuisances` pickled for :func:`_calibrate_payload`: from ``start`` (default: the
+    calibration's values), with ``effect`` (an :class:`datagen.effects.Effect`) in and free, or the baseline."""
+    return pickle.dumps((ref, model, _refit_settings(calibration, settings), settings.search_solver(transient=False),
+                         dict(start if start is not None else calibration.values), effect))
+
+
+def _calibrate_payload(payload: bytes):
+    """One nuisance refit (:func:`_refit_payload`), in a worker process or in this one."""
+    from compare.calibration import calibrate
+
+    ref, model, cs, solver, start, effect = pickle.loads(payload)
+    extra = () if effect is None else (effect,)
+    return calibrate(ref, model, extra_effects=extra, settings=cs, free_effect=effect is not None, solver=solver,
+                     start=start)
+
+
 def _refine_nuisances(results: list, ref: Reference, model, calibration, settings: AttributionSettings,
-                      disagreements) -> int:
+                      disagreements, *, executor=None, null_refit=None) -> int:
     """Refit the calibrated nuisances with each of the ``refine_top`` best periodic candidates in (held at its
     fitted parameters); a candidate keeps the better of the two errors. Returns the simulations run.
 
@@ -297,25 +363,35 @@ def _refine_nuisances(results: list, ref: Reference, model, calibration, setting
       (1 s, calibrated): the null wheel eccentricity was credited 22 % of the error before; the refitted
       baseline's error was 1.46 dB against the calibration's 2.07 dB (coordinate scans stop short where two
       dampings trade off).
+
+    With ``executor`` (a process pool) the candidates' refits run in its workers, and ``null_refit`` is the
+    baseline's, submitted before the search (:func:`attribute`): each refit is one deterministic function of
+    its pickled arguments, so the result is the same as in this process. Measured on the escalated default
+    path (``experiments/bench_compare.py``, 2 idle cores): the calibrated pass's refit 18.4 s in this process,
+    10.9 s in two workers (the candidates' refits, free in their effect too, cost more than the baseline's).
     """
-    from compare.calibration import CalibrationSettings, calibrate
     from compare.error import combine, excess
     from datagen.effects import EffectSpec
 
-    cs = CalibrationSettings(parameters=tuple(calibration.values), widths_u=tuple(settings.refine_widths_u),
-                             points_per_side=tuple(settings.refine_points), seed=settings.seed)
-    periodic = settings.search_solver(transient=False)
     ranked = sorted((c for c in results if c.status == "fitted" and math.isfinite(c.raw_error_db)),
                     key=lambda c: c.raw_error_db)[:settings.refine_top]
     if not ranked:
+        if null_refit is not None:
+            null_refit.cancel()
         return 0
-    null = calibrate(ref, model, settings=cs, start=calibration.values, solver=periodic)
+    null = (null_refit.result() if null_refit is not None
+            else _calibrate_payload(_refit_payload(ref, model, calibration, settings)))
     n = null.n_simulations
-    for c in ranked:
-        better = null.error_db < c.raw_baseline_error_db      # raw errors (Calibration.error_db is raw)
-        effect = EffectSpec.from_dict({"name": c.effect, **c.params}).build()
-        cal = calibrate(ref, model, extra_effects=(effect,), settings=cs, free_effect=True, solver=periodic,
-                        start=null.values if better else calibration.values)
+    # raw errors (Calibration.error_db is raw)
+    better = [null.error_db < c.raw_baseline_error_db for c in ranked]
+    payloads = [_refit_payload(ref, model, calibration, settings, start=null.values if b else None,
+                               effect=EffectSpec.from_dict({"name": c.effect, **c.params}).build())
+                for c, b in zip(ranked, better)]
+    if executor is not None:
+        cals = [f.result() for f in [executor.submit(_calibrate_payload, p) for p in payloads]]
+    else:
+        cals = [_calibrate_payload(p) for p in payloads]
+    for c, b, cal in zip(ranked, better, cals):
         n += cal.n_simulations
         # raw errors on both sides: the fit's objective
         c.nuisance = dict(cal.values) if cal.error_db < c.raw_error_db else dict(calibration.values)
@@ -323,7 +399,7 @@ def _refine_nuisances(results: list, ref: Reference, model, calibration, setting
             c.params = {**c.params, **cal.effect_params}
             c.set_raw(dict(cal.view_error_db), cal.error_db)
             c.explains = explained_keys(ref, cal.residual_db, disagreements)
-            if better:
+            if b:
                 c.raw_baseline_error_db = null.error_db
                 c.baseline_view_error_db = excess(dict(null.view_error_db), c.noise_view_db)
                 c.baseline_error_db = combine(c.baseline_view_error_db)
