@@ -38,8 +38,8 @@ from compare.chaos import chaotic_realisations, may_be_chaotic, profile_ladder
 from compare.comparison import NOISE_DRAWS, Reference, evaluate, simulate_model
 from compare.error import effective_count
 from compare.fitspace import CHAIN_EFFECTS, fit_space
-from compare.fitting import (explained_keys, prepared_case, record_period_s, search_group, transient_groups,
-                             window_label)
+from compare.fitting import (explained_keys, frequency_ladder, prepared_case, record_period_s, search_group,
+                             transient_groups, window_label, window_s)
 from gearpit.errors import GearpitError
 
 __all__ = ["attribute", "Attribution", "AttributionSettings", "CandidateResult", "choose_claim", "rivals_of",
@@ -235,8 +235,9 @@ def _confirm_on_record(results: list, ref: Reference, model, settings: Attributi
     one batch with the baseline (time-stepped alike, the baseline with its noise draws, each candidate against
     the baseline's noise error), each with its best window fit and its ``runners_up`` (the next
     :data:`RUNNERS_UP` distinct window trials: the error surface of a short window is ragged, measured for a
-    50 um backlash: 2.33-2.86 dB among fits from 60 to 130 um, and its minimum need not be the whole record's);
-    the one with the lowest whole-record error is kept, its errors become the candidate's (the 1-sigma stays
+    50 um backlash: 2.33-2.86 dB among fits from 60 to 130 um, and its minimum need not be the whole record's)
+    and the best fit with each frequency moved by up to the window's resolution in steps of the record's
+    (:func:`compare.fitting.frequency_ladder`); the one with the lowest whole-record error is kept, its errors become the candidate's (the 1-sigma stays
     the window's), and one that then fails the claim rule gets the status "not confirmed on the whole record". A
     nonlinear candidate (a mesh-force law: its record may be chaotic) is then profiled on whole-record ladders
     (:func:`_profile_nonlinear`, :mod:`compare.chaos`). Returns the number of simulations run (0 when no
@@ -249,7 +250,9 @@ def _confirm_on_record(results: list, ref: Reference, model, settings: Attributi
     if not todo:
         return 0
     solver = settings.search_solver(transient=True)
-    options = [[c.params] + list(c.runners_up) for c in todo]
+    record_s, win_s = len(ref.x) / ref.fs_hz, window_s(ref, settings)
+    options = [[c.params] + list(c.runners_up) + frequency_ladder(fit_space(get(c.effect)), c.params, record_s, win_s)
+               for c in todo]
     extra = [()] + [(EffectSpec.from_dict({"name": c.effect, **p}).build(),) for c, ps in zip(todo, options) for p in ps]
     try:
         ys = simulate_model(ref, model, extra_effects_list=extra, seed=settings.seed,

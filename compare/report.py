@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from compare.chaos import describe_interval
+from compare.escalation import reason_text
 from gearpit import __version__
 from gearpit.atomic import atomic_path
 
@@ -119,15 +120,11 @@ def _calibration_html(cal: dict | None, escalation: dict | None = None) -> list[
     """The nuisance-calibration section (compare.calibration; why it ran: compare.escalation)."""
     why = []
     if escalation and escalation.get("escalated"):
-        best = escalation.get("as_written_best")
         why = [f"<p>Calibrated because the model as written (error {escalation['as_written_error_db']:.2f} dB) left "
-               f"the mismatch unexplained: no claimed effect lowered its error by "
-               f"{100 * escalation['explained_reduction']:.0f} % (best: "
-               + (f"{html.escape(best['effect'])}, {100 * best['reduction']:.1f} %" if best else "none")
-               + "). Its row is in the ledger below.</p>"]
+               f"the mismatch open: {html.escape(reason_text(escalation))}. Its row is in the ledger below.</p>"]
     rej = (escalation or {}).get("calibration_rejected")
     if rej is not None:
-        why = [f"<p>No claimed effect explained the mismatch of the model as written, so the drive-train nuisances "
+        why = [f"<p>As written, {html.escape(reason_text(escalation))}, so the drive-train nuisances "
                f"were calibrated and the attribution repeated; that pass ended at {rej['error_db']:.2f} dB (with "
                f"{html.escape(rej.get('claimed') or 'no claim')}), above the model as written's "
                f"{rej['as_written_error_db']:.2f} dB, so the calibration was not used: "

@@ -164,10 +164,15 @@ SCHEMA = {
                            "explained_reduction": {"type": "number",
                                                    "description": "what 'explains' means: a claimed effect lowering "
                                                                   "the error by at least this fraction"},
+                           "reason": {"enum": ["unexplained", "unbounded"],
+                                      "description": "why \"auto\" calibrated: no claimed effect lowered the first "
+                                                     "pass's error by explained_reduction, or those that did have an "
+                                                     "amount the record does not bound (an open interval); absent "
+                                                     "when it did not calibrate"},
                            "as_written_error_db": _NUM,
                            "as_written_best": {"type": ["object", "null"],
                                                "description": "the first pass's best candidate: effect, reduction, "
-                                                              "claimed"},
+                                                              "claimed (whenever \"auto\" calibrated)"},
                            "calibration_rejected": {
                                "type": "object",
                                "description": "\"auto\" calibrated and attributed again, but that pass ended "

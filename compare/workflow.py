@@ -31,7 +31,7 @@ from pathlib import Path
 from compare.candidates import Attribution, AttributionSettings, within_noise
 from compare.channels import resolution_message
 from compare.comparison import Comparison, prepare_reference
-from compare.escalation import EXPLAINED_REDUCTION, compare_and_attribute
+from compare.escalation import compare_and_attribute, reason_text
 from compare.ledger import append_row, last_candidate, ledger_path, make_row, read_ledger
 from compare.measurement import load_measurement
 from compare.model import ComparisonModel, parse_add
@@ -118,17 +118,15 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
     comparison, att = staged.comparison, staged.attribution
     escalation = staged.summary()
     if staged.escalated:
-        best = escalation["as_written_best"]
-        messages.append(f"model as written: error {escalation['as_written_error_db']:.2f} dB; no claimed effect "
-                        f"explains {100 * EXPLAINED_REDUCTION:.0f} % of it (best: "
-                        + (f"{best['effect']}, {100 * best['reduction']:.1f} %" if best else "none")
-                        + "), so the drive-train nuisances were calibrated and the attribution repeated")
+        messages.append(f"model as written: error {escalation['as_written_error_db']:.2f} dB; "
+                        + reason_text(escalation) + ", so the drive-train nuisances were calibrated and the "
+                        "attribution repeated")
         row = make_row(*staged.as_written, run=len(rows) + 1, measurement_path=str(measurement_path))
         append_row(lpath, row)
         rows = rows + [row]
     rej = escalation.get("calibration_rejected")
     if rej is not None:
-        messages.append(f"no claimed effect explains {100 * EXPLAINED_REDUCTION:.0f} % of the error, so the drive-train "
+        messages.append(reason_text(escalation) + ", so the drive-train "
                         "nuisances were calibrated and the attribution repeated, but that pass ended higher ("
                         f"{rej['error_db']:.2f} dB with " + (rej.get("claimed") or "no claim")
                         + f", against {rej['as_written_error_db']:.2f} dB as written); the model as written is kept")

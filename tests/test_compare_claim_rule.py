@@ -145,3 +145,33 @@ def test_rivals_are_the_effects_the_views_cannot_tell_from_the_claim():
     assert rivals_of(claimed, ranked, settings) == ["speed_fluctuation"]
     assert rivals_of(claimed, ranked, AttributionSettings(rival_reduction=0.07)) == ["speed_fluctuation", "backlash"]
     assert rivals_of(None, ranked, settings) == []
+
+
+def test_a_claim_whose_amount_the_record_does_not_bound_escalates():
+    """compare.escalation.escalation_reason, on candidates built from the backlash example (30 um, 2 N m; band's
+    mesh record, seed 3): as written backlash is claimed at 60 % but its whole-record ladder ends on a plateau,
+    [89 um, open] ('unbounded': calibrate and attribute again); the same claim with a closed interval explains the
+    mismatch; below the explained reduction it is 'unexplained'; a second claim that is bounded explains it."""
+    from compare.candidates import Attribution, CandidateResult
+    from compare.escalation import escalation_reason, explains, reason_text
+
+    def cand(name, error_db, interval=None):
+        return CandidateResult(name, "", {"backlash_m": 126e-6}, {}, error_db, 4.14, {"order": error_db}, "2 s", 1,
+                               claimed=True, interval=dict(interval or {}))
+
+    def att(*cands):
+        return Attribution(list(cands), [], 0.0, 0)
+
+    open_ = cand("backlash", 1.65, {"backlash_m": (89e-6, None)})
+    assert open_.reduction == pytest.approx(0.60, abs=0.01)
+    assert escalation_reason(att(open_)) == "unbounded" and not explains(att(open_))
+    closed = cand("backlash", 1.65, {"backlash_m": (22e-6, 45e-6)})
+    assert escalation_reason(att(closed)) is None and explains(att(closed))
+    weak = cand("backlash", 2.40, {"backlash_m": (22e-6, 45e-6)})
+    assert escalation_reason(att(weak)) == "unexplained"
+    bounded = cand("pitch_error", 1.80)      # a periodic fit: no ladder, no interval
+    assert escalation_reason(att(open_, bounded)) is None
+    doc = {"reason": "unbounded", "explained_reduction": 0.5,
+           "as_written_best": {"effect": "backlash", "reduction": 0.6, "claimed": True}}
+    assert "does not bound its amount" in reason_text(doc)
+    assert "no claimed effect explains 50 %" in reason_text({**doc, "reason": "unexplained"})

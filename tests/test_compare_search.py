@@ -231,7 +231,9 @@ def test_a_window_fit_is_claimed_only_if_it_holds_on_the_whole_record():
         model = ComparisonModel()
         c = posing("speed_fluctuation", params)
         n = _confirm_on_record([c], ref, model, settings, [])
-        assert n == 2 and c.window == "1 s"
+        # the baseline, the fit and its frequency ladder (compare.fitting.frequency_ladder: 1 s record, 0.62 s
+        # window -> +/-0.5 and +/-1.0 Hz)
+        assert n == 6 and c.window == "1 s"
         assert (c.status == "fitted") is truth, (c.reduction, c.view_error_db, c.baseline_view_error_db)
         if truth:
             assert c.reduction >= settings.claim_reduction and choose_claim([c], settings) is c
@@ -320,3 +322,29 @@ def test_a_fine_ladder_steps_outwards_from_an_unbracketed_best():
     down = [v for v in f if v < 22.52]
     assert len(up) == 2 and max(up) == pytest.approx(22.52 ** 2 / 22.08, rel=1e-6), f
     assert len(down) == 3 and all(22.08 < v < 22.52 for v in down), f
+
+
+def test_frequency_ladder_spans_the_window_resolution_in_steps_of_the_record():
+    """compare.fitting.frequency_ladder: a 2 s record searched on a 0.62 s window. The window fixes a frequency to
+    about 1 / (2 x 0.62) = 0.81 Hz, the record resolves 1 / (2 x 2) = 0.25 Hz: the ladder moves the speed
+    fluctuation's frequency by +/-0.25 ... +/-1.0 Hz (reaching 23.06 Hz from the 23.56 Hz window fit of the seed-4
+    encoder case), keeps the amplitude, leaves effects without a frequency alone and stays inside the bounds."""
+    from compare.fitting import LADDER_STEPS, frequency_ladder
+    from compare.fitspace import fit_space
+    from datagen.effects import get
+
+    space = fit_space(get("speed_fluctuation"))
+    best = {"frequency_hz": 23.56, "amplitude_fraction": 0.013}
+    ladder = frequency_ladder(space, best, 2.0, 0.621)
+    f = np.array([p["frequency_hz"] for p in ladder])
+    assert len(ladder) == 2 * LADDER_STEPS and np.allclose(np.diff(np.sort(np.r_[f, 23.56])), 0.25)
+    assert f.min() == pytest.approx(22.56) and f.max() == pytest.approx(24.56) and 23.56 not in f
+    assert min(abs(f - 23.0)) <= 0.125
+    assert all(p["amplitude_fraction"] == 0.013 for p in ladder)
+    assert frequency_ladder(fit_space(get("backlash")), {"backlash_m": 3e-5}, 2.0, 0.621) == []
+    # a long record on a short window: at most LADDER_STEPS a side, steps widened to still reach the half resolution
+    far = np.array([p["frequency_hz"] for p in frequency_ladder(space, best, 10.0, 0.5)])
+    assert len(far) == 2 * LADDER_STEPS and far.max() - 23.56 == pytest.approx(1.0)
+    # near the lower bound only the values inside it
+    low = frequency_ladder(space, {"frequency_hz": 0.3, "amplitude_fraction": 0.01}, 2.0, 0.621)
+    assert all(p["frequency_hz"] >= 0.0 for p in low) and len(low) == LADDER_STEPS + 1
