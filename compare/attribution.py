@@ -237,9 +237,10 @@ def _confirm_on_record(results: list, ref: Reference, model, settings: Attributi
     :data:`RUNNERS_UP` distinct window trials: the error surface of a short window is ragged, measured for a
     50 um backlash: 2.33-2.86 dB among fits from 60 to 130 um, and its minimum need not be the whole record's)
     and the best fit with each frequency moved by up to the window's resolution in steps of the record's
-    (:func:`compare.fitting.frequency_ladder`); the one with the lowest whole-record error is kept, its errors become the candidate's (the 1-sigma stays
-    the window's), and one that then fails the claim rule gets the status "not confirmed on the whole record". A
-    nonlinear candidate (a mesh-force law: its record may be chaotic) is then profiled on whole-record ladders
+    (:func:`compare.fitting.frequency_ladder`); the one with the lowest whole-record error is kept, its errors
+    become the candidate's (the 1-sigma stays the window's), and one that then fails the claim rule gets the
+    status "not confirmed on the whole record". A nonlinear candidate (a mesh-force law: its record may be
+    chaotic) is then profiled on whole-record ladders
     (:func:`_profile_nonlinear`, :mod:`compare.chaos`). Returns the number of simulations run (0 when no
     candidate needed it).
     """
@@ -251,8 +252,8 @@ def _confirm_on_record(results: list, ref: Reference, model, settings: Attributi
         return 0
     solver = settings.search_solver(transient=True)
     record_s, win_s = len(ref.x) / ref.fs_hz, window_s(ref, settings)
-    options = [[c.params] + list(c.runners_up) + frequency_ladder(fit_space(get(c.effect)), c.params, record_s, win_s)
-               for c in todo]
+    options = [[c.params] + list(c.runners_up)
+               + frequency_ladder(fit_space(get(c.effect)), c.params, record_s, win_s) for c in todo]
     extra = [()] + [(EffectSpec.from_dict({"name": c.effect, **p}).build(),) for c, ps in zip(todo, options) for p in ps]
     try:
         ys = simulate_model(ref, model, extra_effects_list=extra, seed=settings.seed,

@@ -120,9 +120,8 @@ class Staged:
         """The JSON document's ``escalation`` entry (:data:`compare.schema.SCHEMA`)."""
         out = {"mode": self.mode, "escalated": self.escalated, "explained_reduction": EXPLAINED_REDUCTION}
         if self.reason is not None:     # the first pass: kept beside the calibrated one, or reported (rejected)
-            c0, a0 = self.as_written or (self.comparison, self.attribution)
             out["reason"] = self.reason
-            out["as_written_best"] = _best_summary(a0)
+            out["as_written_best"] = _best_summary((self.as_written or (self.comparison, self.attribution))[1])
         if self.escalated:
             out["as_written_error_db"] = float(self.as_written[0].error_db["total"])
         if self.rejected is not None:
