@@ -109,7 +109,7 @@ nuisances at all (a transient batch per nuisance step). So the default
 attributes against the model as written first and calibrates only when that
 leaves the mismatch unexplained (:mod:`compare.escalation`): on a rig whose
 drive train is far from the defaults the calibrated pass is the better one
-(README, "On another rig").
+(docs/compare_validation.md, "On another rig").
 
 References
 ----------
