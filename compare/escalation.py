@@ -171,7 +171,7 @@ def reason_text(escalation: dict) -> str:
     if escalation.get("reason") == "unbounded" and best:
         return (f"{best['effect']} is claimed ({100 * best['reduction']:.1f} % of the error) but the record does not "
                 "bound its amount")
-    return (f"no claimed effect explains {100 * escalation['explained_reduction']:.0f} % of it (best: "
+    return (f"no claimed effect explains {100 * escalation['explained_reduction']:.0f} % of the error (best: "
             + (f"{best['effect']}, {100 * best['reduction']:.1f} %" if best else "none") + ")")
 
 
