@@ -171,7 +171,8 @@ def _fit_in_workers(transient: list, periodic: list, args: tuple, tail: tuple, c
         # foreign rig's loop, when the periodic fits ran in this process)
         payload = pickle.dumps((args, tail))
         stepped = [executor.submit(_search_and_confirm_payload, g, payload) for g in transient_groups(transient)]
-        null_refit = (executor.submit(_calibrate_payload, _refit_payload(ref, model, calibration, settings))
+        null_refit = (executor.submit(_refit_payload, pickle.dumps(_refit_args(ref, model, calibration,
+                                                                                settings)))
                       if calibration is not None else None)
         jobs = [(n, executor.submit(_search_payload, [n], payload)) for n in periodic]
         results, n_sims = [], 0
@@ -330,22 +331,26 @@ def _refit_settings(calibration, settings: AttributionSettings):
                                points_per_side=tuple(settings.refine_points), seed=settings.seed)
 
 
-def _refit_payload(ref: Reference, model, calibration, settings: AttributionSettings, start: dict | None = None,
-                   effect=None) -> bytes:
-    """One refit of :func:`_refine_nuisances` pickled for :func:`_calibrate_payload`: from ``start`` (default: the
+def _refit_args(ref: Reference, model, calibration, settings: AttributionSettings, start: dict | None = None,
+                effect=None) -> tuple:
+    """The arguments of one refit of :func:`_refine_nuisances` (:func:`_refit`): from ``start`` (default: the
     calibration's values), with ``effect`` (an :class:`datagen.effects.Effect`) in and free, or the baseline."""
-    return pickle.dumps((ref, model, _refit_settings(calibration, settings), settings.search_solver(transient=False),
-                         dict(start if start is not None else calibration.values), effect))
+    return (ref, model, _refit_settings(calibration, settings), settings.search_solver(transient=False),
+            dict(start if start is not None else calibration.values), effect)
 
 
-def _calibrate_payload(payload: bytes):
-    """One nuisance refit (:func:`_refit_payload`), in a worker process or in this one."""
+def _refit(ref, model, cs, solver, start, effect):
+    """One nuisance refit (:func:`_refit_args`)."""
     from compare.calibration import calibrate
 
-    ref, model, cs, solver, start, effect = pickle.loads(payload)
     extra = () if effect is None else (effect,)
     return calibrate(ref, model, extra_effects=extra, settings=cs, free_effect=effect is not None, solver=solver,
                      start=start)
+
+
+def _refit_payload(payload: bytes):
+    """:func:`_refit` in a worker process, its arguments pickled by the caller (:func:`_fit_in_workers` says why)."""
+    return _refit(*pickle.loads(payload))
 
 
 def _refine_nuisances(results: list, ref: Reference, model, calibration, settings: AttributionSettings,
@@ -383,18 +388,17 @@ def _refine_nuisances(results: list, ref: Reference, model, calibration, setting
         if null_refit is not None:
             null_refit.cancel()
         return 0
-    null = (null_refit.result() if null_refit is not None
-            else _calibrate_payload(_refit_payload(ref, model, calibration, settings)))
+    null = null_refit.result() if null_refit is not None else _refit(*_refit_args(ref, model, calibration, settings))
     n = null.n_simulations
     # raw errors (Calibration.error_db is raw)
     better = [null.error_db < c.raw_baseline_error_db for c in ranked]
-    payloads = [_refit_payload(ref, model, calibration, settings, start=null.values if b else None,
-                               effect=EffectSpec.from_dict({"name": c.effect, **c.params}).build())
-                for c, b in zip(ranked, better)]
+    jobs = [_refit_args(ref, model, calibration, settings, start=null.values if b else None,
+                        effect=EffectSpec.from_dict({"name": c.effect, **c.params}).build())
+            for c, b in zip(ranked, better)]
     if executor is not None:
-        cals = [f.result() for f in [executor.submit(_calibrate_payload, p) for p in payloads]]
+        cals = [f.result() for f in [executor.submit(_refit_payload, pickle.dumps(j)) for j in jobs]]
     else:
-        cals = [_calibrate_payload(p) for p in payloads]
+        cals = [_refit(*j) for j in jobs]
     for c, b, cal in zip(ranked, better, cals):
         n += cal.n_simulations
         # raw errors on both sides: the fit's objective

@@ -275,10 +275,10 @@ def window_s(ref: Reference, settings) -> float:
 LADDER_STEPS = 4
 
 
-def frequency_ladder(space, params: dict, record_s: float, window_s_: float) -> list[dict]:
+def frequency_ladder(space, params: dict, record_s: float, window_dur_s: float) -> list[dict]:
     """Variants of the window fit ``params`` with each frequency parameter (unit Hz) of ``space`` moved in steps
     of half the whole record's frequency resolution, ``1 / (2 record_s)``, out to the window's half resolution,
-    ``1 / (2 window_s_)``, on each side (at most :data:`LADDER_STEPS` steps a side, coarser steps then; inside the
+    ``1 / (2 window_dur_s)``, on each side (at most :data:`LADDER_STEPS` steps a side, coarser steps then; inside the
     bounds): what the whole-record check also measures.
 
     Why: a window fixes a frequency only to about its own resolution, and a line that far off on the whole record
@@ -288,8 +288,8 @@ def frequency_ladder(space, params: dict, record_s: float, window_s_: float) -> 
     for p in space.params:
         if p.unit != "Hz" or p.name not in params:
             continue
-        half_window = 1.0 / (2.0 * window_s_)
-        k_max = min(LADDER_STEPS, math.ceil(record_s / window_s_))
+        half_window = 1.0 / (2.0 * window_dur_s)
+        k_max = min(LADDER_STEPS, math.ceil(record_s / window_dur_s))
         step = max(1.0 / (2.0 * record_s), half_window / LADDER_STEPS)
         for k in range(-k_max, k_max + 1):
             f = float(params[p.name]) + k * step
