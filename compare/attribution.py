@@ -242,13 +242,18 @@ def _confirm_on_record(results: list, ref: Reference, model, settings: Attributi
     become the candidate's (the 1-sigma stays the window's), and one that then fails the claim rule gets the
     status "not confirmed on the whole record". A nonlinear candidate (a mesh-force law: its record may be
     chaotic) is then profiled on whole-record ladders
-    (:func:`_profile_nonlinear`, :mod:`compare.chaos`). Returns the number of simulations run (0 when no
-    candidate needed it).
+    (:func:`_profile_nonlinear`, :mod:`compare.chaos`). Such a candidate is checked from
+    ``chaotic_confirm_fraction`` of ``claim_reduction`` on its window: its window fit can sit on the free-flight
+    plateau beside a narrow valley between rattle regimes (:mod:`compare.chaos`), which only the ladder finds
+    (measured: the 30 um backlash example on noise seed 5 was fitted at 178 um on its window, 29.4 %, and never
+    reached the record). Returns the number of simulations run (0 when no candidate needed it).
     """
     from datagen.effects import EffectSpec, get
 
     whole = window_label(ref)
-    todo = [c for c in results if c.window != whole and c.status == "fitted" and c.reduction >= settings.claim_reduction]
+    todo = [c for c in results if c.window != whole and c.status == "fitted"
+            and c.reduction >= settings.claim_reduction * (settings.chaotic_confirm_fraction
+                                                           if may_be_chaotic(get(c.effect)) else 1.0)]
     if not todo:
         return 0
     solver = settings.search_solver(transient=True)

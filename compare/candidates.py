@@ -71,6 +71,9 @@ class AttributionSettings:
     min_excess_to_noise: float = 1.0
     #: no claim of a candidate that takes less than this multiple of the noise error off the excess error
     min_explained_to_noise: float = 1.0
+    #: a candidate whose record may be chaotic (compare.chaos.may_be_chaotic) is checked on the whole record
+    #: from this fraction of claim_reduction on its window (compare.attribution._confirm_on_record says why)
+    chaotic_confirm_fraction: float = 0.5
     transient_window_s: float = 0.5
     transient_startup_s: float = 0.15
     transient_omega_dt: float = 0.5

@@ -58,11 +58,15 @@ fit space (:func:`compare.attribution._profile_nonlinear`: the record no longer
 depends on it there) names the effect but not its size, and the drive train is
 what decides the size. Measured on the backlash example (30 um, 2 N m, a
 grade-9 profile error known to rig and model; band's mesh record, noise seeds
-3-5): as written the ladder's best is free flight, 126 um (1.86 dB against
-2.32-2.55 dB at 22-45 um, realisation scatter 0.1 dB), reported as [89 um,
-open], which excludes the truth, though backlash is claimed and halves the
-error; calibrated first, seed 3 fits 38 um and seed 4 33 um. The calibrated
-pass is still the answer only if it ends lower (below).
+3-5) with the former, coarse ladder: as written its best was free flight,
+126 um (1.86 dB against 2.32-2.55 dB at 22-45 um), reported as [89 um, open],
+which excludes the truth; calibrated first, seed 3 fitted 38 um. Since the
+ladder is dense (:mod:`compare.chaos`, 2026-11-28) the model as written fits
+31.6 um on all three seeds; on seeds 3 and 5 free flight stays within the
+realisation scatter of that valley, so the interval is [22 um, open], the run
+escalates, and the calibrated pass ends higher (1.44 against 1.28 dB; 4.10
+against 1.31 dB: it claims nothing) and is rejected. The calibrated pass is
+still the answer only if it ends lower (below).
 
 Escalating needs no threshold of its own beyond the claim rule: a rig without a
 hidden effect and a disturbance outside the registry (bearing defect, mains

@@ -102,10 +102,10 @@ NUISANCE_LIMITED: dict = {}
 
 #: effects that are claimed first and halve the error but whose amount the default loop does not recover (name ->
 #: reason; only the fit check xfails). None at present. backlash was here at stop 35: on the band's mesh record the
-#: 30 um example's whole-record ladder prefers free flight at the model's default drive train (126 um and up: 1.86
-#: dB against 2.32-2.55 dB at 22-45 um), reported as [89 um, open], on noise seeds 3, 4 and 5. Since a claim whose
-#: amount the record does not bound escalates (compare.escalation: calibrate, attribute again, keep the pass that
-#: ends lower), seed 3 fits 38 um, interval [19, 108] um, ratio 0.42 (stop 36).
+#: 30 um example's whole-record ladder preferred free flight at the model's default drive train (126 um and up:
+#: 1.86 dB against 2.32-2.55 dB at 22-45 um), reported as [89 um, open], on noise seeds 3, 4 and 5. The valley
+#: at 27-32 um lay between the former ladder's factor-2 steps; the dense ladder (compare.chaos) fits 31.6 um as
+#: written on all three seeds (error ratio 0.31-0.32; 2026-11-28).
 FIT_LIMITED: dict = {}
 
 #: pairs of effects whose signatures in these views coincide (name -> its twin). Source: the simulator's truth and

@@ -72,6 +72,28 @@ def test_ladder_spans_both_bounds_and_its_realisations_stay_inside_them():
     assert tw < 1e-3 and tw == pytest.approx(1e-3 * (1 - REALISATION_STEP), rel=1e-15)
 
 
+def test_ladder_finds_a_valley_narrower_than_a_factor_two_between_rattle_regimes():
+    """The error profile measured on the backlash example (compare.chaos module docstring: 30 um, noise seed 4,
+    two realisations per value) as a constructed table: a valley at 25-34 um (1.6 dB) between chaotic regimes
+    (2.6-2.8 dB), free flight from 100 um up (2.18 dB, regular). From the window's fit of 89 um the ladder must
+    land in the valley and bound it on both sides, not report free flight (the former ladder's factor-2 steps
+    asked 22 and 45 um and reported [89 um, no bound])."""
+    space = fit_space(get("backlash"))
+
+    def errors(trials):
+        out = []
+        for i, t in enumerate(trials):      # profile_ladder asks each value's REALISATIONS twins in a row
+            b, k = t["backlash_m"], 0.1 * (-1) ** i     # a twin is another draw of the chaos: +/-0.1 dB
+            out.append(2.18 if b >= 100e-6 else 1.6 + k if 25e-6 <= b <= 34e-6 else 2.7 + k)
+        return out
+
+    (prof,) = profile_ladder(space, {"backlash_m": 89e-6}, errors)
+    best = prof.values[prof.best]
+    lo, hi = prof.interval()
+    assert 25e-6 <= best <= 34e-6, best
+    assert lo is not None and hi is not None and 20e-6 <= lo < best < hi <= 40e-6, (lo, hi)
+
+
 def _backlash_records(values):
     from compare.synthetic import HIDDEN_EXAMPLES
     from datagen.geometry import preset
