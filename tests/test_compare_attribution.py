@@ -162,6 +162,21 @@ def test_hidden_effect_is_claimed_halves_the_error_and_is_fitted(name):
     assert ok, text
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [4, 5])
+def test_backlash_is_fitted_on_other_noise_seeds(seed):
+    """The backlash example (30 um) on two more noise draws of the rig: claimed first, the error at least halved,
+    the amount within the example's tolerance (factor 2). Both failed with the factor-2 ladder (126 um reported);
+    seed 5 also needs the chaotic candidate's looser gate to the whole record (its window fit, 178 um, took 29.4 %:
+    under the claim threshold; compare.attribution._confirm_on_record)."""
+    ex, c0, a, c1 = run_hidden_case("backlash", seed=seed)
+    top = a.candidates[0]
+    assert top.effect == "backlash" and top.claimed, [(x.effect, round(x.reduction, 3)) for x in a.candidates[:4]]
+    assert c1.error_db["total"] <= 0.5 * c0.error_db["total"], (c1.error_db, c0.error_db)
+    ok, text = check_fit(ex, top.params)
+    assert ok, text
+
+
 #: the backlash example's chaotic regime where the amount is not identified (compare.synthetic.HIDDEN_EXAMPLES says
 #: why): 50 um at the example's operating point, where the back flanks are struck so rarely that every backlash
 #: from 20-35 um up fits as well. Measured 2026-11-27 over five realisations of the rig (50 um x (1 + k 1e-13)):
