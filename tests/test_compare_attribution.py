@@ -102,7 +102,7 @@ NUISANCE_LIMITED: dict = {}
 #: 30 um example's whole-record ladder preferred free flight at the model's default drive train (126 um and up:
 #: 1.86 dB against 2.32-2.55 dB at 22-45 um), reported as [89 um, open], on noise seeds 3, 4 and 5. The valley
 #: at 27-32 um lay between the former ladder's factor-2 steps; the dense ladder (compare.chaos) fits 31.6 um as
-#: written on all three seeds (error ratio 0.31-0.32; 2026-11-28).
+#: written on all three seeds (error ratio 0.37-0.38; 2026-11-28).
 FIT_LIMITED: dict = {}
 
 #: pairs of effects whose signatures in these views coincide (name -> its twin). Source: the simulator's truth and
