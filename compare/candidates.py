@@ -83,6 +83,9 @@ class AttributionSettings:
     refine_top: int = 4
     refine_widths_u: tuple = (0.1, 0.03)
     refine_points: tuple = (2, 1)
+    #: with a calibrated model: Sobol points of the joint refit of the claimed effect and the nuisances over the
+    #: whole nuisance box (compare.joint_refit; 0: off)
+    joint_samples: int = 256
 
     def search_solver(self, transient: bool) -> dict:
         """The ``[solver]`` table of the search's simulations: time-stepped (window fits, whole-record check)
@@ -127,6 +130,8 @@ class CandidateResult:
     #: a time-stepped candidate: the excess error of the model as the comparison simulated it, which the claim
     #: must lower by claim_reduction too (module docstring); NaN: not checked
     model_error_db: float = math.nan
+    #: the joint refit of the claimed effect with the nuisances (compare.joint_refit): what was tried and kept
+    joint_refit: dict | None = None
 
     @property
     def worst_view_rise_db(self) -> float:
@@ -161,7 +166,8 @@ class CandidateResult:
                 "worst_view_rise_db": self.worst_view_rise_db,
                 "interval": {k: list(v) for k, v in self.interval.items()},
                 "realisation_scatter_db": self.realisation_scatter_db,
-                "model_error_db": self.model_error_db if math.isfinite(self.model_error_db) else None}
+                "model_error_db": self.model_error_db if math.isfinite(self.model_error_db) else None,
+                "joint_refit": self.joint_refit}
 
 
 @dataclass

@@ -203,6 +203,7 @@ def compare_and_attribute(measurement, model, *, reference=None, calibrate=None,
     from compare.candidates import AttributionSettings
     from compare.calibration import calibrated_compare
     from compare.comparison import prepare_reference
+    from compare.joint_refit import refit_claim_jointly
 
     mode = resolve_mode(model, calibrate)
     ref = reference if reference is not None else prepare_reference(measurement)
@@ -215,6 +216,7 @@ def compare_and_attribute(measurement, model, *, reference=None, calibrate=None,
                           disagreements=c.disagreements, parallel=parallel, calibration=c.calibration,
                           model_error_db=c.evaluation.residuals.excess_total_db)
             settle_rivals(ref, c, a, settings, seed=seed)
+            refit_claim_jointly(ref, c, a, settings, parallel=parallel)     # a calibrated pass's claim only
         return a
 
     c = calibrated_compare(measurement, model, reference=ref, seed=seed, calibrate_nuisances=mode is True)

@@ -207,6 +207,12 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
                      "error below the noise error); a time-stepped effect is fitted on a window and measured on "
                      "the whole record before it is ranked, and must lower the comparison's own error by 30 % "
                      "too.</p>")
+        top = next((c for c in att["candidates"] if c["claimed"]), None)
+        if top is not None and top.get("joint_refit"):
+            from compare.joint_refit import joint_refit_message
+
+            parts.append("<p><b>Joint refit:</b> " + html.escape(joint_refit_message(
+                top["effect"], top["joint_refit"], top["params"], top.get("nuisance") or {})) + ".</p>")
         if att.get("resolution"):
             from compare.channels import resolution_message
 

@@ -131,7 +131,15 @@ SCHEMA = {
                                                             "description": "a time-stepped candidate: the excess "
                                                                            "error of the model as compared, which "
                                                                            "a claim must lower by 30 % too; null: "
-                                                                           "not checked (periodic candidates)"}}}},
+                                                                           "not checked (periodic candidates)"},
+                                                        "joint_refit": {
+                                                            "type": ["object", "null"],
+                                                            "description": "the claimed candidate of a calibrated "
+                                                            "pass: its joint refit with the nuisances over the whole "
+                                                            "box (compare.joint_refit): samples, starts, seed, kept, "
+                                                            "chosen (current / refined / searched), error_before_db, "
+                                                            "error_after_db, params_before, nuisance_before, "
+                                                            "n_simulations, elapsed_s; null: not run"}}}},
                 "unexplained": {"type": "array", "items": {"type": "object", "required": ["key", "text"]}},
                 "claimed": {"type": "array", "items": {"type": "string"}},
                 "rivals": {"type": "array", "items": {"type": "string"},

@@ -32,6 +32,7 @@ from compare.candidates import Attribution, AttributionSettings, within_noise
 from compare.channels import resolution_message
 from compare.comparison import Comparison, prepare_reference
 from compare.escalation import compare_and_attribute, reason_text
+from compare.joint_refit import joint_refit_message
 from compare.ledger import append_row, last_candidate, ledger_path, make_row, read_ledger
 from compare.measurement import load_measurement
 from compare.model import ComparisonModel, parse_add
@@ -136,6 +137,9 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
                         + f" (error {cal.error_before_db:.2f} -> {cal.error_db:.2f} dB)")
     if att is not None and att.resolution is not None:
         messages.append(resolution_message(att.resolution))
+    if att is not None and att.claimed and att.claimed[0].joint_refit is not None:
+        top = att.claimed[0]
+        messages.append(joint_refit_message(top.effect, top.joint_refit, top.params, top.nuisance))
     res = comparison.evaluation.residuals
     if att is not None and not att.claimed and within_noise(res.excess_total_db, res.noise_total_db,
                                                             settings or AttributionSettings()):
