@@ -16,6 +16,9 @@
 - ``fitting``       one group of candidate effects fitted in batched rounds; each one's best fit and 1-sigma
 - ``candidates``    a fitted candidate, the attribution's result, and the claim and rival rules
 - ``attribution``   fit every missing registered effect, rank by error reduction, claim, flag the unexplained
+- ``joint_refit``   a calibrated pass's claimed effect refitted with the nuisances over their whole box
+- ``chaos``         a chaotic model (backlash rattle): several realisations, whole-record ladders, intervals
+- ``refit``         the effects already in the model fitted again, each against the model without it
 - ``channels``      further measured channels (encoders' transmission error, ...) settle rivals the sensor cannot
 - ``escalation``    the "auto" calibration mode: as written first, calibrated when nothing explains the mismatch
 - ``ledger``        append-only history of comparisons next to the model

@@ -88,8 +88,9 @@ def test_a_fit_at_the_truth_is_kept(rig):
 
 
 def test_the_step_applies_only_to_a_calibrated_periodic_claim(rig):
-    """Not run (None, nothing changed) without a calibration, with joint_samples = 0, for a time-stepped effect,
-    and without a claim."""
+    """Not run (None, nothing changed) without a calibration, with joint_samples = 0, without a claim, for a
+    time-stepped effect, and for a pitch error of the wheel (its record repeats once per wheel revolution, 60
+    mesh cycles: too costly per sample, compare.joint_refit)."""
     from compare.joint_refit import refit_claim_jointly
 
     m, ref, ex = rig
@@ -101,6 +102,8 @@ def test_the_step_applies_only_to_a_calibrated_periodic_claim(rig):
     a.candidates[0].claimed = False
     assert refit_claim_jointly(ref, c0, a, on) is None
     a.candidates[0].claimed = True
+    a.candidates[0].params = {"grade": 5.0, "gears": "wheel"}
+    assert refit_claim_jointly(ref, c0, a, on) is None
     a.candidates[0].effect = "speed_fluctuation"
     assert refit_claim_jointly(ref, c0, a, on) is None
     assert a.candidates[0].joint_refit is None and a.candidates[0].params["grade"] == 5.0
