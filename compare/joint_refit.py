@@ -116,7 +116,9 @@ def refit_claim_jointly(ref, comparison, attribution, settings, *, parallel: boo
         The candidate's ``joint_refit`` record (also set on it), or None when the step does not apply.
     """
     from compare.fitspace import fit_space
-    from datagen.effects import get
+    from compare.fitting import record_period_s
+    from compare.refit import MIN_GAIN
+    from datagen.effects import EffectSpec, get
 
     cal = comparison.calibration
     claimed = attribution.claimed
@@ -128,9 +130,6 @@ def refit_claim_jointly(ref, comparison, attribution, settings, *, parallel: boo
         return None
     if any(e.is_nonlinear or e.is_nonstationary for e in comparison.model.effects):
         return None         # the model itself is time-stepped: no periodic path to search on
-    from compare.fitting import record_period_s
-    from datagen.effects import EffectSpec
-
     effect = EffectSpec.from_dict({"name": cand.effect, **cand.params}).build()
     if record_period_s(ref, comparison.model, effect) > 1.001 * 60.0 / ref.speed.speed_rpm:
         return None         # longer than a pinion revolution: too costly per sample (module docstring)
@@ -153,8 +152,6 @@ def refit_claim_jointly(ref, comparison, attribution, settings, *, parallel: boo
         scored.append((c.evaluation.residuals.excess_total_db, kind, nu, params, sig, c))
     current_db = scored[0][0]
     best = min(scored, key=lambda s: s[0])
-    from compare.refit import MIN_GAIN
-
     kept = best[1] != "current" and best[0] <= (1.0 - MIN_GAIN) * current_db
     record = {"samples": n_samples, "starts": STARTS, "seed": int(settings.seed), "kept": bool(kept),
               "chosen": best[1] if kept else "current", "error_before_db": float(current_db),
