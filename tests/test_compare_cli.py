@@ -29,7 +29,8 @@ def rig(tmp_path_factory):
 
 
 def test_loop_compare_add_and_watch_the_error_fall(rig, capsys):
-    """Run 1 (nuisances calibrated) ranks pitch_error first; run 2 (--add pitch_error, parameters and the
+    """Run 1 (nuisances calibrated) ranks pitch_error first, refits it jointly with the nuisances and says so
+    (CLI line, JSON ``joint_refit``); run 2 (--add pitch_error, parameters and the
     nuisances they were fitted with taken from the ledger, calibrated again) cuts the total error by more than half; the ledger has both rows with the
     calibrated nuisances; the JSON validates against the schema; the HTML embeds its figures (no external
     src)."""
@@ -43,6 +44,9 @@ def test_loop_compare_add_and_watch_the_error_fall(rig, capsys):
 
     jsonschema.validate(doc, SCHEMA)
     assert doc["attribution"]["candidates"][0]["effect"] == "pitch_error"
+    # the calibrated claim was refitted jointly with the nuisances (compare.joint_refit): recorded and reported
+    joint = doc["attribution"]["candidates"][0]["joint_refit"]
+    assert joint is not None and joint["samples"] == 256 and "refitted jointly with the drive-train" in out1, joint
     assert main(["compare", str(rig / "rig.csv"), "--add", "pitch_error", "--no-attribution", "--calibrate",
                  "--report", str(rig / "run2.html"), "--json", str(rig / "run2.json")]) == 0
     capsys.readouterr()
