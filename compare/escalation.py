@@ -33,8 +33,9 @@ so the user sees what the calibration changed.
 
 The calibrated pass is the answer only if it ends lower: each pass ends at
 the error of the model with its claimed effect (its baseline's error when it
-claims nothing), and when the calibrated pass ends above the model as
-written's, the first pass is the answer and the calibration is reported as not
+claims nothing; a calibrated pass's claimed periodic effect after its joint
+refit with the nuisances, :mod:`compare.joint_refit`), and when the calibrated
+pass ends above the model as written's, the first pass is the answer and the calibration is reported as not
 used (:attr:`Staged.rejected`). Why: the nuisances are fitted to the order view
 alone (:mod:`compare.calibration`), so they can lower it at the other views'
 expense, and an effect claimed against such a baseline need not bring the
