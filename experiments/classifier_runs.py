@@ -116,6 +116,8 @@ def summary(metrics: dict, extra: dict | None = None) -> dict:
         s.update({"teeth_accuracy": metrics["teeth"]["accuracy"], "teeth_macro_f1": metrics["teeth"]["macro_f1"]})
     if "severity_mae" in metrics:
         s["severity_mae"] = metrics["severity_mae"]
+    if "novelty" in metrics:      # the records flagged as unlike the training records (models/novelty.py)
+        s["novelty"] = metrics["novelty"]
     s.update(extra or {})
     return s
 

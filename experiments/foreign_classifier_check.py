@@ -20,7 +20,9 @@ The CNN is the protocol's chosen variant (``tsa_op``), the best baseline beside 
 training split (70 %, the protocol's seed) of each training sweep: ``default`` (what every protocol uses) and
 ``default_pitch`` (the same plus random single pitch deviations, ``datagen/effects/pitch_error.py``). Each is tested
 on its own held-out 30 % (in-domain) and on the foreign records twice: as drawn (each with a random-walk pitch
-error of 5-15 um, like any real gear) and the same draws without it. Printed: severity / teeth accuracy.
+error of 5-15 um, like any real gear) and the same draws without it. Printed: severity / teeth accuracy, and
+the novelty warning of each model (:mod:`models.novelty`): the share of records it flags as unlike the training
+records, and the severity accuracy on the flagged and on the other records.
 
 Run: about 25 min on 2 cores (two datasets of 1200 records generated once, 4 min; two CNN trainings; feature
 tables).
@@ -148,6 +150,7 @@ def main(argv=None) -> int:
         res["runs"][name] = run
     print("| trained on | model | in-domain | foreign | foreign, no pitch deviations |")
     print("|---|---|---|---|---|")
+    flagged_rows = []
     for name, run in res["runs"].items():
         rows = [("CNN tsa_op", run["cnn"])]
         if "baselines" in run:
@@ -156,6 +159,21 @@ def main(argv=None) -> int:
             cells = [f"{100 * r[k]['accuracy']:.1f} / {100 * r[k]['teeth_accuracy']:.1f}"
                      for k in ("in_domain", "foreign", "foreign_no_pitch_error")]
             print(f"| {name} | {label} | " + " | ".join(cells) + " |")
+            flagged_rows.append((name, label, r))
+    # the novelty warning (models/novelty.py): share of records flagged, severity accuracy on flagged / others
+    print("\n| trained on | model | " + " | ".join(f"{k}: flagged, acc. flagged / not" for k in
+                                                 ("in-domain", "foreign", "foreign, no pitch deviations")) + " |")
+    print("|---|---|---|---|---|")
+    for name, label, r in flagged_rows:
+        cells = []
+        for k in ("in_domain", "foreign", "foreign_no_pitch_error"):
+            nv = r[k].get("novelty")
+            if nv is None:
+                cells.append("-")
+                continue
+            acc = [("-" if v is None else f"{100 * v:.0f}") for v in (nv["accuracy_flagged"], nv["accuracy_not_flagged"])]
+            cells.append(f"{100 * nv['flagged_fraction']:.1f} %, {acc[0]} / {acc[1]} %")
+        print(f"| {name} | {label} | " + " | ".join(cells) + " |")
     print(json.dumps(res, default=str))
     return 0
 

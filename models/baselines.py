@@ -14,6 +14,10 @@ severity regression):
 
 Missing feature values (NaN) are replaced by the training medians.
 
+**Novelty.** Each baseline also keeps a novelty model of its standardised feature table
+(:mod:`models.novelty`, fitted on 80 % of the training records and scaled by the
+other 20 %), so a record unlike the training records gets a warning as with the CNN.
+
 **No pickling.** After fitting, every estimator is exported to plain arrays
 (:attr:`FeatureClassifier.arrays`): scaler means and scales, linear
 coefficients, and for the tree ensembles one node table per ensemble
@@ -39,6 +43,7 @@ import numpy as np
 
 from gearpit.errors import require
 from models.data import TEETH_CLASSES, SignalSet
+from models.novelty import MIN_HELD_OUT, NoveltyModel, fit_novelty, join_warnings, novelty_warning
 from models.spec import ModelSpec, Predictions, check_input, training_ranges
 
 KINDS: tuple[str, ...] = ("logreg", "rf", "gb")
@@ -238,8 +243,19 @@ class FeatureClassifier:
                 full[:, self.arrays[f"{task}_classes"]] = _raw_output(kind, task, self.arrays, x)
             out[task] = full
         sev = np.clip(_raw_output(kind, "reg", self.arrays, x), 0.0, None)
+        warnings = warnings if warnings is not None else [""] * n
+        nov = None
+        if NOVELTY_PREFIX + "means" in self.arrays:
+            model = self.novelty_model()
+            nov = model.novelty((x - self.arrays[NOVELTY_PREFIX + "center"]) / self.arrays[NOVELTY_PREFIX + "scale"])
+            warnings = join_warnings(warnings, [novelty_warning(v, model.quantile) for v in nov])
         return Predictions(list(self.spec.severity_classes), list(self.spec.teeth_classes), out["sev"], out["teeth"],
-                           sev, warnings if warnings is not None else [""] * n)
+                           sev, warnings, nov)
+
+    def novelty_model(self) -> NoveltyModel | None:
+        """The novelty model of the standardised feature table (:mod:`models.novelty`), None if not fitted."""
+        a = {k[len(NOVELTY_PREFIX):]: v for k, v in self.arrays.items() if k.startswith(NOVELTY_PREFIX)}
+        return NoveltyModel.from_arrays(a) if "means" in a else None
 
     def predict(self, data: SignalSet, *, features: np.ndarray | None = None, allow_mismatch: bool = False,
                 n_jobs: int = 1) -> Predictions:
@@ -296,12 +312,16 @@ def fit_baseline(data: SignalSet, kind: str, *, features: np.ndarray, feature_na
         fitted[task_key] = est
         arrays.update(_export(kind, task_key, est, xi[0]))
 
+    arrays.update(_fit_feature_novelty(xi, y_sev, seed))
+
     spec = ModelSpec(model_type=kind, task=task, fs_hz=float(data.fs_hz), n_samples=data.n_samples, pair=data.pair,
                      representation={**feature_config, "feature_names": list(feature_names)},
                      severity_classes=classes, teeth_classes=list(TEETH_CLASSES),
                      severity_scale=float(sev.max()) if sev.max() > 0 else 1.0, channel=data.channel,
                      ranges=training_ranges(data.labels), train_config={"kind": kind, "seed": seed, "task": task},
-                     training={"n_train": len(data), "source": data.source})
+                     training={"n_train": len(data), "source": data.source,
+                               **({"novelty": FeatureClassifier(None, arrays).novelty_model().summary()}
+                                  if NOVELTY_PREFIX + "means" in arrays else {})})
     model = FeatureClassifier(spec, arrays)
     # the exported arrays must reproduce scikit-learn's predictions
     check = model.predict_features(x[: min(64, len(x))])
@@ -310,3 +330,27 @@ def fit_baseline(data: SignalSet, kind: str, *, features: np.ndarray, feature_na
     require(np.allclose(got, ref, atol=1e-9), "export", float(np.abs(got - ref).max()),
             "exported baseline equal to scikit-learn (internal error)")
     return model
+
+
+#: prefix of the novelty model's arrays among a baseline's arrays
+NOVELTY_PREFIX = "novelty_"
+#: share of the training records held out to scale the novelty (:mod:`models.novelty`)
+NOVELTY_HELD_OUT = 0.2
+
+
+def _fit_feature_novelty(x: np.ndarray, y: np.ndarray, seed: int) -> dict[str, np.ndarray]:
+    """The novelty model of a baseline (:mod:`models.novelty`) on its imputed feature table ``x``, standardised
+    by the training records' mean and standard deviation: fitted on a seeded random 80 % of them, scaled by the
+    other 20 %. Empty (no warning) when that 20 % is fewer than :data:`models.novelty.MIN_HELD_OUT` records."""
+    n = x.shape[0]
+    k = int(round(NOVELTY_HELD_OUT * n))
+    if k < MIN_HELD_OUT:
+        return {}
+    center = x.mean(axis=0)
+    scale = x.std(axis=0)
+    scale = np.where(scale > 0, scale, 1.0)
+    z = (x - center) / scale
+    order = np.random.default_rng([int(seed), 17]).permutation(n)
+    model = fit_novelty(z[order[k:]], y[order[k:]], z[order[:k]])
+    return {NOVELTY_PREFIX + "center": center, NOVELTY_PREFIX + "scale": scale,
+            **{NOVELTY_PREFIX + key: np.asarray(v) for key, v in model.to_arrays().items()}}

@@ -19,6 +19,7 @@ from threadpoolctl import threadpool_limits
 from gearpit.errors import require
 from models.cnn import GearCNN
 from models.data import SignalSet
+from models.novelty import NoveltyModel, join_warnings, novelty_warning
 from models.operating import n_operating, operating_features
 from models.representations import represent_crops
 from models.tsa import represent_crops_and_difference, represent_crops_and_residual
@@ -109,6 +110,8 @@ class CNNClassifier:
 
     network: GearCNN
     spec: ModelSpec
+    #: the distance to the training records (:mod:`models.novelty`); None for a model saved before it existed
+    novelty: NoveltyModel | None = None
 
     def predict(self, data: SignalSet, *, n_crops: int = 3, allow_mismatch: bool = False,
                 batch_size: int = 256, threads: int = 1) -> Predictions:
@@ -127,6 +130,7 @@ class CNNClassifier:
         p_sev = np.zeros((n, len(self.spec.severity_classes)))
         p_teeth = np.zeros((n, len(self.spec.teeth_classes)))
         sev = np.zeros(n)
+        nov = np.zeros(n)
         self.network.eval()
         per = max(1, batch_size // k)
 
@@ -139,6 +143,8 @@ class CNNClassifier:
             p_sev[sl] = torch.softmax(out["severity_class"], dim=1).numpy().reshape(b, k, -1).sum(axis=1)
             p_teeth[sl] = torch.softmax(out["teeth"], dim=1).numpy().reshape(b, k, -1).sum(axis=1)
             sev[sl] = out["severity"].numpy().reshape(b, k).sum(axis=1)
+            if self.novelty is not None:    # a record's novelty: the median over its crops
+                nov[sl] = np.median(self.novelty.novelty(out["features"].numpy()).reshape(b, k), axis=1)
 
         slices = [slice(i0, min(i0 + per, n)) for i0 in range(0, n, per)]
         # one torch thread per worker (set in run): the workers share nothing but the read-only network, so no
@@ -152,5 +158,8 @@ class CNNClassifier:
                 with ThreadPoolExecutor(threads) as pool:
                     list(pool.map(run, slices))
         severity = np.clip(sev / k * self.spec.severity_scale, 0.0, None)
+        if self.novelty is not None:
+            warnings = join_warnings(warnings, [novelty_warning(v, self.novelty.quantile) for v in nov])
         return Predictions(list(self.spec.severity_classes), list(self.spec.teeth_classes), p_sev / k,
-                           p_teeth / k, severity, warnings)
+                           p_teeth / k, severity, warnings, None if self.novelty is None else nov)
+

@@ -92,8 +92,8 @@ class GearCNN(nn.Module):
     def forward(self, x: torch.Tensor, side: torch.Tensor | None = None) -> dict[str, torch.Tensor]:
         """``x``: (batch, channels, length), ``side``: (batch, n_side) or None -> dict of head outputs
         (logits, scaled severity)."""
-        h = self.features(x)
-        parts = [h.mean(dim=2), h.amax(dim=2), torch.sqrt(h.square().mean(dim=2) + 1e-8)]
+        pooled = self.pooled(x)
+        parts = [pooled]
         if self.n_side:
             require(side is not None and tuple(side.shape) == (x.shape[0], self.n_side), "side",
                     None if side is None else tuple(side.shape), f"a ({x.shape[0]}, {self.n_side}) tensor")
@@ -101,7 +101,14 @@ class GearCNN(nn.Module):
         h = torch.cat(parts, dim=1)
         h = self.shared(h)
         return {"severity_class": self.severity_class(h), "severity": self.severity(h).squeeze(1),
-                "teeth": self.teeth(h)}
+                "teeth": self.teeth(h), "features": pooled}
+
+    def pooled(self, x: torch.Tensor) -> torch.Tensor:
+        """The convolution features pooled over the input's length (mean, max, RMS of each channel):
+        ``(batch, 3 * widths[-1])``, what the heads read besides the side inputs (and what
+        :mod:`models.novelty` measures the distance to the training records in)."""
+        h = self.features(x)
+        return torch.cat([h.mean(dim=2), h.amax(dim=2), torch.sqrt(h.square().mean(dim=2) + 1e-8)], dim=1)
 
 
 def count_parameters(model: nn.Module) -> int:

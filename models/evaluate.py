@@ -83,6 +83,8 @@ def evaluate(data: SignalSet, pred: Predictions) -> dict:
         out["severity_mae_n"] = int(known.sum())
     out["mean_confidence"] = float(pred.confidence.mean())
     out["n_warnings"] = int(sum(1 for w in pred.warnings if w))
+    if pred.novelty is not None:
+        out["novelty"] = novelty_scores(pred.novelty, y_sev == p_sev)
     breakdown = {}
     for col in BREAKDOWN_COLUMNS:
         if col not in data.labels:
@@ -104,6 +106,17 @@ def evaluate(data: SignalSet, pred: Predictions) -> dict:
     return out
 
 
+def novelty_scores(novelty: np.ndarray, correct: np.ndarray) -> dict:
+    """How many records the novelty warning flags (novelty > 1, :mod:`models.novelty`) and the severity accuracy
+    on the flagged and the other records (None where there are none)."""
+    flagged = np.asarray(novelty) > 1.0
+    ok = np.asarray(correct, dtype=bool)
+    return {"median": float(np.median(novelty)), "flagged": int(flagged.sum()),
+            "flagged_fraction": float(flagged.mean()),
+            "accuracy_flagged": float(ok[flagged].mean()) if flagged.any() else None,
+            "accuracy_not_flagged": float(ok[~flagged].mean()) if (~flagged).any() else None}
+
+
 def _confusion_md(scores: dict) -> list[str]:
     cls = scores["classes"]
     lines = ["| true \\ predicted | " + " | ".join(cls) + " |", "|---" * (len(cls) + 1) + "|"]
@@ -122,6 +135,15 @@ def report_markdown(metrics: dict, *, title: str = "Evaluation") -> str:
     if "severity_mae" in metrics:
         lines += [f"Severity MAE: {metrics['severity_mae']:.4f} (pitted fraction)", ""]
     lines += [f"Mean confidence: {metrics['mean_confidence']:.3f}; records with warnings: {metrics['n_warnings']}", ""]
+    if "novelty" in metrics:
+        nv = metrics["novelty"]
+
+        def pct(v):
+            return "-" if v is None else f"{100 * v:.1f} %"
+
+        lines += [f"Records unlike the training records (novelty > 1): {nv['flagged']} "
+                  f"({pct(nv['flagged_fraction'])}); severity accuracy on them {pct(nv['accuracy_flagged'])}, on the "
+                  f"others {pct(nv['accuracy_not_flagged'])}; median novelty {nv['median']:.2f}", ""]
     lines += ["## Severity class confusion", ""] + _confusion_md(s)
     if t:
         lines += ["", "## Pitted-teeth confusion", ""] + _confusion_md(t)

@@ -7,6 +7,8 @@ A model is a directory:
 - CNN: ``weights.pt``, the network's ``state_dict`` (tensors only), read back with
   ``torch.load(..., weights_only=True)``, which refuses anything but tensors and
   plain containers;
+- ``novelty.npz`` (optional): the novelty model of :mod:`models.novelty` (class means, precision matrix,
+  held-out distances), read with ``numpy.load(..., allow_pickle=False)``;
 - feature baselines: ``arrays.npz`` (fitted parameters as plain arrays: scaler,
   linear coefficients, tree node tables; see :mod:`models.baselines`), read with
   ``numpy.load(..., allow_pickle=False)``.
@@ -24,6 +26,7 @@ import torch
 from gearpit.atomic import atomic_path
 from gearpit.errors import InputError, require
 from models.classifier import CNNClassifier, build_network
+from models.novelty import NOVELTY_FILE, NoveltyModel
 from models.spec import ModelSpec
 
 SPEC_FILE = "model.json"
@@ -41,6 +44,7 @@ def save_model(model, path: str | Path) -> Path:
     if isinstance(model, CNNClassifier):
         with atomic_path(out / WEIGHTS_FILE) as tmp:
             torch.save(model.network.state_dict(), tmp)
+        _save_novelty(model.novelty, out)
     elif isinstance(model, FeatureClassifier):
         with atomic_path(out / ARRAYS_FILE) as tmp:
             with open(tmp, "wb") as fh:
@@ -75,9 +79,29 @@ def load_model(path: str | Path):
         net = build_network(spec)
         net.load_state_dict(state)
         net.eval()
-        return CNNClassifier(net, spec)
+        return CNNClassifier(net, spec, _load_novelty(path))
     a = Path(path) / ARRAYS_FILE
     require(a.is_file(), "MODEL", str(path), f"a model directory containing {ARRAYS_FILE}")
     with np.load(a, allow_pickle=False) as z:
         arrays = {k: z[k] for k in z.files}
     return FeatureClassifier(spec, arrays)
+
+
+def _save_novelty(novelty, out: Path) -> None:
+    """The novelty model's arrays (:mod:`models.novelty`), or no file when there is none (a stale one removed)."""
+    target = out / NOVELTY_FILE
+    if novelty is None:
+        target.unlink(missing_ok=True)
+        return
+    with atomic_path(target) as tmp:
+        with open(tmp, "wb") as fh:
+            np.savez(fh, **novelty.to_arrays())
+
+
+def _load_novelty(path: str | Path):
+    """The saved novelty model, or None for a model saved without one."""
+    f = Path(path) / NOVELTY_FILE
+    if not f.is_file():
+        return None
+    with np.load(f, allow_pickle=False) as z:
+        return NoveltyModel.from_arrays({k: z[k] for k in z.files})

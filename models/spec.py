@@ -214,6 +214,9 @@ class Predictions:
     teeth_proba: np.ndarray
     severity: np.ndarray
     warnings: list[str]
+    #: how unlike the training records each record is (:mod:`models.novelty`; > 1 is warned), None for a model
+    #: saved without a novelty model
+    novelty: np.ndarray | None = None
 
     @property
     def severity_class(self) -> np.ndarray:
@@ -239,5 +242,7 @@ class Predictions:
         })
         for j, c in enumerate(self.severity_classes):
             df[f"p_{c}"] = self.severity_proba[:, j]
+        if self.novelty is not None:
+            df["novelty"] = self.novelty
         df["warning"] = self.warnings
         return df

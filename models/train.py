@@ -40,6 +40,7 @@ from models.augment import AugmentConfig, augment_batch
 from models.classifier import CNNClassifier, build_network
 from models.data import TEETH_CLASSES, SignalSet
 from models.input_checks import check_inputs
+from models.novelty import MIN_HELD_OUT, NoveltyModel, fit_novelty
 from models.operating import check_columns, fit_operating, operating_features
 from models.representation_spec import RepresentationSpec
 from models.representations import represent
@@ -306,12 +307,31 @@ def train_cnn(data: SignalSet, config: TrainConfig = TrainConfig(), *, log=None)
                 break
         net.load_state_dict(best_state)
         net.eval()
+        novelty = _fit_novelty(net, lambda idx: represent(records(idx), rep, fs_hz=data.fs_hz,
+                                                          shaft_hz=None if fr is None else fr[idx],
+                                                          mesh_cps=None if mc is None else mc[idx], z_pinion=z,
+                                                          starts=0.5, z_wheel=zw),
+                               tr, y_cls[tr], x_val, config.batch_size) if va.size >= MIN_HELD_OUT else None
     elapsed = time.perf_counter() - t0
     best_row = history[best_epoch - 1] if best_epoch else history[-1]
     training = {"epochs_run": len(history), "best_epoch": best_epoch, "seconds": round(elapsed, 2),
                 "n_train": int(tr.size), "n_val": int(va.size), "val_loss": best_row["val_loss"],
                 "val_accuracy": best_row["val_accuracy"], "val_teeth_accuracy": best_row["val_teeth_accuracy"],
                 "n_parameters": int(sum(p.numel() for p in net.parameters())), "torch_version": torch.__version__,
-                "source": data.source, "history": history}
+                "source": data.source, "history": history,
+                "novelty": novelty.summary() if novelty is not None else
+                f"not fitted: {va.size} validation records, fewer than {MIN_HELD_OUT}"}
     spec = ModelSpec(**{**spec.__dict__, "training": training})
-    return CNNClassifier(net, spec)
+    return CNNClassifier(net, spec, novelty)
+
+
+def _fit_novelty(net, represent_idx, tr: np.ndarray, classes: np.ndarray, x_val: torch.Tensor,
+                 batch: int) -> NoveltyModel:
+    """The novelty model (:mod:`models.novelty`) of the trained ``net``: class means and covariance of the
+    pooled features of the training records (central segment, no augmentation), scaled by the validation
+    records' distances."""
+    with torch.no_grad():
+        f_tr = np.concatenate([net.pooled(torch.from_numpy(represent_idx(tr[i:i + batch]))).numpy()
+                               for i in range(0, tr.size, batch)])
+        f_val = net.pooled(x_val).numpy()
+    return fit_novelty(f_tr, classes, f_val)

@@ -3,9 +3,11 @@
 FILES are measurement files with sidecars (:mod:`compare.measurement`), a folder
 of them, or a generated dataset directory. For every record prints the
 predicted severity class with its probability (the confidence), the severity
-fraction and the pitted-teeth class, and a warning when the record lies outside
-what the model was trained on (speed, load or SNR outside the trained range;
-with ``--allow-mismatch``, a different sampling rate or gear pair). A different
+fraction and the pitted-teeth class, its novelty (how unlike the training records
+its signal is, :mod:`models.novelty`: above 1 it is farther from every class than
+99 % of held-out training records) and a warning when the record lies outside
+what the model was trained on (speed, load or SNR outside the trained range; a
+novelty above 1; with ``--allow-mismatch``, a different sampling rate or gear pair). A different
 sampling rate, gear pair or a record too short is refused otherwise.
 """
 from __future__ import annotations
@@ -62,13 +64,13 @@ def run(args) -> int:
             print(json.dumps(row))
     else:
         cols = ["record", "severity_class", "confidence", "severity", "teeth_class", "teeth_confidence"]
-        cols += [c for c in ("speed_rpm", "speed_method") if c in table]
+        cols += [c for c in ("novelty", "speed_rpm", "speed_method") if c in table]
         print(table[cols].to_string(index=False, float_format=lambda v: f"{v:.3f}"))
     n_warn = int((table["warning"] != "").sum())
     for rec, w in zip(table["record"], table["warning"]):
         if w:
             print(f"warning: {rec}: {w}", file=sys.stderr)
     if n_warn:
-        print(f"warning: {n_warn} of {len(table)} records outside the trained conditions; treat them with care",
-              file=sys.stderr)
+        print(f"warning: {n_warn} of {len(table)} records outside the trained conditions or unlike the training "
+              "records (novelty > 1); treat them with care", file=sys.stderr)
     return 0
