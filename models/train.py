@@ -14,6 +14,9 @@
   state is restored afterwards); batches and augmentation draw from
   ``numpy.random.default_rng([seed, epoch])``. Same seed and thread count, same
   weights.
+- **Novelty**: with the best weights, the pooled features of the training records'
+  central segments fit the novelty model of :mod:`models.novelty`, scaled by the
+  validation records' (at least :data:`models.novelty.MIN_HELD_OUT` of them).
 
 References
 ----------
