@@ -144,3 +144,23 @@ def test_a_feature_baseline_warns_on_records_unlike_its_training_records(tmp_pat
     assert np.all(p.novelty > 1.0) and all("unlike the training records" in w for w in p.warnings)
     save_model(model, tmp_path / "b")
     np.testing.assert_array_equal(load_model(tmp_path / "b").predict_features(off).novelty, p.novelty)
+
+
+def test_evaluation_counts_the_flagged_records_and_scores_them_apart():
+    """evaluate() reports how many records the novelty flags and the severity accuracy on the flagged and the
+    other records (a hand-made case: 4 records, 2 flagged, one of them right; both others right)."""
+    import pandas as pd
+
+    from models.data import PairInfo
+    from models.evaluate import evaluate, report_markdown
+    from models.spec import Predictions
+
+    labels = pd.DataFrame({"severity_class": ["healthy", "severe", "severe", "healthy"], "severity": [0, .3, .3, 0]})
+    data = SignalSet(np.zeros((4, 8), np.float32), 1000.0, PairInfo("toy", 13, 29), labels)
+    proba = np.array([[0.9, 0.1], [0.2, 0.8], [0.7, 0.3], [0.6, 0.4]])     # right, right, wrong, right
+    pred = Predictions(["healthy", "severe"], ["0", "1"], proba, np.ones((4, 2)) / 2, np.zeros(4), [""] * 4,
+                       np.array([0.5, 1.5, 2.0, 0.9]))
+    m = evaluate(data, pred)
+    assert m["novelty"]["flagged"] == 2 and m["novelty"]["accuracy_flagged"] == 0.5
+    assert m["novelty"]["accuracy_not_flagged"] == 1.0
+    assert "unlike the training records (novelty > 1): 2" in report_markdown(m)
