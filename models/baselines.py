@@ -244,13 +244,14 @@ class FeatureClassifier:
             out[task] = full
         sev = np.clip(_raw_output(kind, "reg", self.arrays, x), 0.0, None)
         warnings = warnings if warnings is not None else [""] * n
-        nov = None
+        nov, batch = None, None
         if NOVELTY_PREFIX + "means" in self.arrays:
             model = self.novelty_model()
             nov = model.novelty((x - self.arrays[NOVELTY_PREFIX + "center"]) / self.arrays[NOVELTY_PREFIX + "scale"])
             warnings = join_warnings(warnings, [novelty_warning(v, model.quantile) for v in nov])
+            batch = model.batch_shift(nov)
         return Predictions(list(self.spec.severity_classes), list(self.spec.teeth_classes), out["sev"], out["teeth"],
-                           sev, warnings, nov)
+                           sev, warnings, nov, batch)
 
     def novelty_model(self) -> NoveltyModel | None:
         """The novelty model of the standardised feature table (:mod:`models.novelty`), None if not fitted."""

@@ -161,5 +161,6 @@ class CNNClassifier:
         if self.novelty is not None:
             warnings = join_warnings(warnings, [novelty_warning(v, self.novelty.quantile) for v in nov])
         return Predictions(list(self.spec.severity_classes), list(self.spec.teeth_classes), p_sev / k,
-                           p_teeth / k, severity, warnings, None if self.novelty is None else nov)
+                           p_teeth / k, severity, warnings, None if self.novelty is None else nov,
+                           None if self.novelty is None else self.novelty.batch_shift(nov))
 

@@ -23,6 +23,7 @@ from sklearn.metrics import confusion_matrix, f1_score
 from gearpit.atomic import atomic_path
 from gearpit.errors import require
 from models.data import BINARY_CLASSES, SignalSet
+from models.novelty import batch_warning
 from models.spec import Predictions
 
 #: label columns a breakdown is made for (quantile bins when a column takes many values)
@@ -85,6 +86,8 @@ def evaluate(data: SignalSet, pred: Predictions) -> dict:
     out["n_warnings"] = int(sum(1 for w in pred.warnings if w))
     if pred.novelty is not None:
         out["novelty"] = novelty_scores(pred.novelty, y_sev == p_sev)
+        if pred.novelty_batch is not None:
+            out["novelty"]["batch"] = pred.novelty_batch
     breakdown = {}
     for col in BREAKDOWN_COLUMNS:
         if col not in data.labels:
@@ -144,6 +147,8 @@ def report_markdown(metrics: dict, *, title: str = "Evaluation") -> str:
         lines += [f"Records unlike the training records (novelty > 1): {nv['flagged']} "
                   f"({pct(nv['flagged_fraction'])}); severity accuracy on them {pct(nv['accuracy_flagged'])}, on the "
                   f"others {pct(nv['accuracy_not_flagged'])}; median novelty {nv['median']:.2f}", ""]
+        if nv.get("batch", {}).get("shifted"):
+            lines += ["**Warning:** " + batch_warning(nv["batch"]), ""]
     lines += ["## Severity class confusion", ""] + _confusion_md(s)
     if t:
         lines += ["", "## Pitted-teeth confusion", ""] + _confusion_md(t)

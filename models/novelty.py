@@ -24,9 +24,18 @@ flagged (tested) when the held-out records are many (the rate is about ``max(1 -
 ``n`` of them); with fewer than :data:`MIN_HELD_OUT` no novelty model is fitted and no such warning is given.
 What is flagged elsewhere is measured, not assumed.
 
-Limits: the distance is one number per record and knows only the training records; a shift that moves the
-features along the directions the training data already spread over is not flagged, and a flagged record may
-still be classified right. It says "this record is unlike what the model learnt from", not why.
+**A batch as a whole.** A shift too small to carry single records past the 99th percentile can still move a
+whole batch into the tail (measured: every SpectraQuest record read by the real-data CNN of
+``experiments/eval_protocol.py`` had a novelty of 0.78-1.0, where half the held-out records lie below about 0.45,
+and only 0-4 % passed 1). So :meth:`NoveltyModel.batch_shift` counts the records beyond the held-out
+:data:`BATCH_QUANTILE` quantile (10 % of records like the training ones are) and gives the one-sided binomial
+p-value of that count; a batch of at least :data:`BATCH_MIN_RECORDS` with p below :data:`BATCH_ALPHA` is
+reported as unlike the training records as a whole. The held-out quantile is itself estimated from a few hundred
+distances, so the p-value is approximate (it treats the quantile as exact); hence the small ``BATCH_ALPHA``.
+
+Limits: the distance knows only the training records; a shift that moves the features along the directions the
+training data already spread over is not flagged, and a flagged record may still be classified right. It says
+"this record is unlike what the model learnt from", not why.
 
 References
 ----------
@@ -45,6 +54,11 @@ from gearpit.errors import require
 
 #: the held-out distance quantile a novelty is measured in (novelty 1 = this quantile)
 QUANTILE = 0.99
+#: the batch test (module docstring): records beyond this held-out quantile are counted ...
+BATCH_QUANTILE = 0.9
+#: ... in batches of at least this many records, and the batch is reported below this p-value
+BATCH_MIN_RECORDS = 10
+BATCH_ALPHA = 1e-3
 #: fewest held-out records that set a scale: below it no novelty model is fitted (a quantile of a handful of
 #: distances is their maximum, and its false-alarm rate about 1 / (n + 1), not 1 - QUANTILE)
 MIN_HELD_OUT = 10
@@ -103,6 +117,20 @@ class NoveltyModel:
         return cls(np.asarray(arrays["means"], float), np.asarray(arrays["precision"], float),
                    np.sort(np.asarray(arrays["reference"], float)), float(arrays["quantile"]))
 
+    def batch_shift(self, novelty: np.ndarray) -> dict:
+        """Whether a batch of records (their :meth:`novelty` values) lies in the tail of the held-out records as a
+        whole (module docstring): the share beyond the held-out :data:`BATCH_QUANTILE` quantile, the share
+        expected, the one-sided binomial p-value and the verdict (``shifted``: at least
+        :data:`BATCH_MIN_RECORDS` records and p < :data:`BATCH_ALPHA`)."""
+        from scipy.stats import binomtest
+
+        v = np.asarray(novelty, dtype=float)
+        cut = float(np.quantile(self.reference, BATCH_QUANTILE)) / self.threshold
+        k, n = int(np.count_nonzero(v > cut)), int(v.size)
+        p = float(binomtest(k, n, 1.0 - BATCH_QUANTILE, alternative="greater").pvalue) if n else 1.0
+        return {"n": n, "beyond_fraction": k / n if n else 0.0, "expected_fraction": 1.0 - BATCH_QUANTILE,
+                "novelty_cut": cut, "p_value": p, "shifted": bool(n >= BATCH_MIN_RECORDS and p < BATCH_ALPHA)}
+
     def summary(self) -> dict:
         """What the model spec records of it."""
         return {"quantile": self.quantile, "threshold": self.threshold, "n_reference": int(self.reference.size),
@@ -146,3 +174,12 @@ def novelty_warning(value: float, quantile: float = QUANTILE) -> str:
 def join_warnings(first: list[str], second: list[str]) -> list[str]:
     """Per record, the warnings of both lists joined by '; '."""
     return ["; ".join(w for w in pair if w) for pair in zip(first, second)]
+
+
+def batch_warning(batch: dict) -> str:
+    """The warning of a :meth:`NoveltyModel.batch_shift` result that is ``shifted``, or ''."""
+    if not batch.get("shifted"):
+        return ""
+    return (f"the records as a whole are unlike the training records: {100 * batch['beyond_fraction']:.0f} % of them "
+            f"lie beyond the novelty of {batch['novelty_cut']:.2f} that {100 * batch['expected_fraction']:.0f} % of "
+            f"held-out training records pass (binomial p = {batch['p_value']:.1e}); treat every prediction with care")

@@ -217,6 +217,8 @@ class Predictions:
     #: how unlike the training records each record is (:mod:`models.novelty`; > 1 is warned), None for a model
     #: saved without a novelty model
     novelty: np.ndarray | None = None
+    #: the batch test of :meth:`models.novelty.NoveltyModel.batch_shift` over these records, None without novelty
+    novelty_batch: dict | None = None
 
     @property
     def severity_class(self) -> np.ndarray:

@@ -107,6 +107,7 @@ def test_a_trained_cnn_warns_on_records_unlike_its_training_records(toy_model, t
     q = model.predict(SignalSet(noise, test.fs_hz, test.pair, test.labels))
     assert np.all(q.novelty > 1.0), np.sort(q.novelty)[:5]
     assert all("signal unlike the training records" in w for w in q.warnings)
+    assert q.novelty_batch["shifted"] and not p.novelty_batch["shifted"]
     # another machine's signature: a sign-clipped record (odd harmonics of every line) at the same level
     clipped = (np.sign(test.signals) * test.signals.std(axis=1, keepdims=True)).astype(np.float32)
     r = model.predict(SignalSet(clipped, test.fs_hz, test.pair, test.labels))
@@ -164,3 +165,22 @@ def test_evaluation_counts_the_flagged_records_and_scores_them_apart():
     assert m["novelty"]["flagged"] == 2 and m["novelty"]["accuracy_flagged"] == 0.5
     assert m["novelty"]["accuracy_not_flagged"] == 1.0
     assert "unlike the training records (novelty > 1): 2" in report_markdown(m)
+
+
+def test_a_batch_shifted_as_a_whole_is_reported_though_few_records_pass_one(gaussian):
+    """Records with 1.35 times the training spread: few pass novelty 1 singly (< 30 %), but far more than the
+    expected 10 % lie beyond the held-out 90th percentile, and the batch is reported (p < 1e-3); a batch of the
+    training distribution is not (p > 1e-3), nor is a batch of fewer than 10 records however far out."""
+    from models.novelty import batch_warning
+
+    rng, means, scale, model = gaussian
+    x, _ = _blobs(rng, 100, means, 1.35 * scale)
+    nov = model.novelty(x)
+    assert np.mean(nov > 1.0) < 0.30
+    b = model.batch_shift(nov)
+    assert b["shifted"] and b["beyond_fraction"] > 0.3 and b["p_value"] < 1e-3
+    assert "as a whole are unlike the training records" in batch_warning(b)
+    x, _ = _blobs(rng, 100, means, scale)
+    b = model.batch_shift(model.novelty(x))
+    assert not b["shifted"] and b["p_value"] > 1e-3 and batch_warning(b) == ""
+    assert not model.batch_shift(np.full(9, 50.0))["shifted"]

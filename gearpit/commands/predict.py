@@ -70,6 +70,10 @@ def run(args) -> int:
     for rec, w in zip(table["record"], table["warning"]):
         if w:
             print(f"warning: {rec}: {w}", file=sys.stderr)
+    from models.novelty import batch_warning
+
+    if pred.novelty_batch is not None and pred.novelty_batch["shifted"]:
+        print("warning: " + batch_warning(pred.novelty_batch), file=sys.stderr)
     if n_warn:
         print(f"warning: {n_warn} of {len(table)} records outside the trained conditions or unlike the training "
               "records (novelty > 1); treat them with care", file=sys.stderr)
