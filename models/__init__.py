@@ -22,6 +22,8 @@
 - ``classifier``      :class:`CNNClassifier`: a trained network with its spec; prediction
 - ``baselines``       feature-table baselines (logistic regression, random forest, gradient boosting),
                       exported to plain arrays
+- ``novelty``         how unlike the training records a signal is (Mahalanobis distance of the features a model
+                      reads, scaled by held-out records) and whether a batch is, as a whole
 - ``spec``            :class:`ModelSpec` (input spec, classes, ranges, config), input checks, :class:`Predictions`
 - ``io``              save / load without pickle (state_dict + JSON, npz + JSON)
 - ``evaluate``        accuracy, macro-F1, confusion matrices, severity MAE, breakdowns; JSON and Markdown
