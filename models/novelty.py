@@ -96,11 +96,19 @@ class NoveltyModel:
         f = np.asarray(features, dtype=float)
         require(f.ndim == 2 and f.shape[1] == self.means.shape[1], "features", f.shape,
                 f"(n, {self.means.shape[1]}) array (the features the novelty model was fitted on)")
-        d2 = np.empty((f.shape[0], self.means.shape[0]))
-        for j, mu in enumerate(self.means):
-            r = f - mu
-            d2[:, j] = ((r @ self.precision) * r).sum(axis=1)   # BLAS: 12x the einsum's speed at 768 x 288
+        # precision = L L^T: (x - mu)^T P (x - mu) = |L^T x - L^T mu|^2, one matrix product for every class
+        w = self._whitener()
+        z, zm = f @ w, self.means @ w
+        d2 = np.stack([((z - m) ** 2).sum(axis=1) for m in zm], axis=1)
         return np.sqrt(np.maximum(d2.min(axis=1), 0.0))
+
+    def _whitener(self) -> np.ndarray:
+        """The Cholesky factor ``L`` of the precision matrix (``P = L L^T``), computed once."""
+        w = self.__dict__.get("_w")
+        if w is None:
+            w = np.linalg.cholesky(self.precision)
+            object.__setattr__(self, "_w", w)
+        return w
 
     def novelty(self, features: np.ndarray) -> np.ndarray:
         """Distance over :attr:`threshold` (> 1: farther than ``quantile`` of the held-out records)."""
