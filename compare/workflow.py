@@ -149,6 +149,8 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
     if att is not None and att.claimed and att.rivals:
         messages.append(f"claimed {att.claimed[0].effect}, but {', '.join(att.rivals)} lowers the error almost as "
                         "much: these views cannot tell them apart")
+    if att is not None and att.claimed and get(att.claimed[0].effect).mesh_harmonics_only:
+        messages.append(mesh_shape_caveat(att.claimed[0].effect))
     row = make_row(comparison, att, run=len(rows) + 1, measurement_path=str(measurement_path))
     append_row(lpath, row)
     rows = rows + [row]
@@ -162,6 +164,15 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
         messages.append(f"report written: {report}")
     return Outcome(comparison=comparison, attribution=att, ledger=rows, model_path=mpath, messages=messages,
                    document=doc)
+
+
+def mesh_shape_caveat(effect: str) -> str:
+    """What a claim of an effect that changes only the mesh harmonics' levels does and does not show."""
+    return (f"{effect} acts alike on every tooth and changes only the levels of the mesh harmonics; two models of "
+            "the same healthy pair already differ there (another stiffness model, another transfer path: on the "
+            "independent simulator of tests/foreign_rig.py a healthy pair claimed a profile error), so read this "
+            "claim as 'the model's mesh excitation or its path is off' and check the fitted value against what is "
+            "known of the gear before taking it as the gear's own")
 
 
 def write_rig_files(measurement, out: str | Path, *, stem: str = "rig") -> Path:

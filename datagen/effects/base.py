@@ -214,6 +214,10 @@ class Effect:
     signature: ClassVar[str] = ""
     #: what the comparison fits: field names or :class:`Fit` entries; None: the default rule (module docstring)
     fit_parameters: ClassVar[tuple | None] = None
+    #: True for an effect that acts alike on every tooth and so changes only the mesh harmonics' levels (no
+    #: sidebands, no other orders): a comparison that claims it warns that two models of one healthy pair differ
+    #: there too (:mod:`compare.workflow`)
+    mesh_harmonics_only: ClassVar[bool] = False
 
     def __post_init__(self):
         for f in fields(self):

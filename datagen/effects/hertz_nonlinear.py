@@ -106,6 +106,7 @@ class HertzNonlinear(Effect):
 
     name = "hertz_nonlinear"
     signature = "mean mesh stiffness falls (Ma & Zeng k_h at the mean load): mesh resonance moves down"
+    mesh_harmonics_only = True
     #: no free parameter: the effect is tried as it is
     fit_parameters = ()
 

@@ -82,6 +82,7 @@ class ProfileError(Effect):
 
     name = "profile_error"
     signature = "mesh harmonics k*fm rise (same error on every tooth: no shaft-order sidebands)"
+    mesh_harmonics_only = True
     fit_parameters = ("grade", "cycles", "gears")
     grade: float = field(default=6.0, metadata={"unit": "-", "bounds": GRADE_RANGE})
     cycles: float = field(default=2.0, metadata={"unit": "-", "bounds": (0.0, 10.0)})

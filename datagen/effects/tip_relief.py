@@ -94,6 +94,7 @@ class TipRelief(Effect):
 
     name = "tip_relief"
     signature = "near the design load the mesh harmonics k*fm fall; at light load they rise"
+    mesh_harmonics_only = True
     fit_parameters = (Fit("amount_m", scale="log"), "length_fraction", "shape")
     amount_m: float = field(default=10e-6, metadata={"unit": "m", "bounds": (0.0, 100e-6)})
     length_fraction: float = field(default=1.0, metadata={"unit": "-", "bounds": (0.05, 1.5)})
