@@ -154,12 +154,108 @@ def slots_at_centre_offset(stiffness, dx_m, dy_m, *, subdivisions: int = 1) -> n
         edges = (np.ceil(edges[0] - 1e-9) - 0.5, np.floor(edges[1] + 1e-9) + 0.5)
     d_start = ((start - pair.contact_start_m) - dg) / h
     d_end = -dg / h
-    block = max(1, _BLOCK_ELEMENTS // ((S + 1) * shift.size))
     out = np.empty((dx.size, S + 1))
-    for r0 in range(0, dx.size, block):
-        i = np.arange(r0, min(r0 + block, dx.size))
-        out[i] = _points(v, edges, d_start[i], d_end[i], i, ppc, q)
+    if q > 1 and shift.size >= BANDED_MIN_SLICES:
+        _points_banded(out, v, edges, d_start, d_end, ppc, q)
+    else:
+        block = max(1, _BLOCK_ELEMENTS // ((S + 1) * shift.size))
+        for r0 in range(0, dx.size, block):
+            i = np.arange(r0, min(r0 + block, dx.size))
+            out[i] = _points(v, edges, d_start[i], d_end[i], i, ppc, q)
     return np.concatenate([out[:, 1:], out[:, :1]], axis=1)
+
+
+#: slices from which :func:`slots_at_centre_offset` sums a point's slices by contact bands
+#: (:func:`_points_banded`) instead of one by one (:func:`_points`); a spur pair (one slice) keeps the latter,
+#: bit for bit
+BANDED_MIN_SLICES = 8
+#: record points per block of :func:`_points_banded`
+_BANDED_BLOCK_POINTS = 8192
+#: margin (grid steps) of the band bounds: a slice this close to a bound is summed one by one, by the full rule
+_BAND_MARGIN = 1e-9
+
+
+def _points_banded(out, v, edges, d_start, d_end, ppc: int, q: int) -> None:
+    """:func:`_points` on every record point, into ``out``, with the slices summed by bands (same result to
+    rounding; tested against it).
+
+    Why: on a helical pair the slices (100 across the face) make :func:`_points` the cost of a hook-2c record:
+    measured on ``helical-dct`` at 512 positions per cycle, a wheel eccentricity's record over one wheel
+    revolution (245760 points x 5 columns x 100 slices) took 3.2 s of the 3.4 s of its periodic simulation, and
+    the attribution of a 2 s record spent 32-37 s of its pool's time on that candidate.
+
+    How: along a column the slices' nominal contact edges ``edges`` (grid steps from ``A``) rise with the slice's
+    stagger, so at one point the slices of one engagement fall into consecutive runs: out of contact (share 0:
+    either edge factor is 0), inside (both edge factors and both cell shares are 1, so the value is the linear
+    interpolation ``(1 - t) v_a + t v_b``), and the two edge bands between them. The inside run is summed from
+    prefix sums of ``v`` over the slices; only the edge bands (a few slices each) take :func:`_points`' full rule.
+    The run bounds come from the conditions of that rule solved for the slice's edge (``searchsorted``), with a
+    margin of :data:`_BAND_MARGIN` steps: a slice near a bound goes to a band, where the full rule decides."""
+    n_grid, n_cols = v.shape[0], v.shape[1] - 1
+    e0 = np.asarray(edges[0], float)
+    e1 = np.broadcast_to(np.asarray(edges[1], float), e0.shape)
+    order = np.argsort(e0, kind="stable")
+    if not np.array_equal(order, np.arange(e0.size)):
+        e0, e1, v = e0[order], e1[order], v[:, :, order]
+    if np.any(np.diff(e1) < 0):      # the contact length is the same on every slice, so e1 follows e0
+        raise ValueError("slots_at_centre_offset: contact ends not in the order of the contact starts")
+    prefix = np.zeros(v.shape[:2] + (v.shape[2] + 1,))
+    np.cumsum(v, axis=2, out=prefix[:, :, 1:])
+    cols = np.arange(n_cols)
+    for r0 in range(0, out.shape[0], _BANDED_BLOCK_POINTS):
+        i = np.arange(r0, min(r0 + _BANDED_BLOCK_POINTS, out.shape[0]))
+        ia, sub = np.divmod(i, q)
+        c0 = ia % ppc
+        t = (sub / q)[:, None]
+        d_s, d_e = d_start[i][:, None], d_end[i][:, None]
+        j = (c0[:, None] + (cols[None, :] - 1) * ppc).astype(float)                  # (points, cols)
+        fs, fe = np.floor(t - d_s), np.floor(d_e - t)
+        # inside: e0 <= j + 0.5 + min(floor(t - d_s), -d_s) - 1 and e1 >= j + 0.5 + max(-floor(d_e - t), 1 - d_e)
+        hi = np.searchsorted(e0, (j - 0.5 + np.minimum(fs, -d_s) - _BAND_MARGIN).ravel(), side="right")
+        lo = np.searchsorted(e1, (j + 0.5 + np.maximum(-fe, 1.0 - d_e) + _BAND_MARGIN).ravel(), side="left")
+        # out of contact: e0 >= j + 1.5 + floor(t - d_s) (start factor 0) or e1 <= j - 1.5 - floor(d_e - t)
+        end = np.searchsorted(e0, (j + 1.5 + fs + _BAND_MARGIN).ravel(), side="left")
+        beg = np.searchsorted(e1, (j - 1.5 - fe - _BAND_MARGIN).ravel(), side="right")
+        shape = j.shape
+        beg, end = beg.reshape(shape), np.maximum(end.reshape(shape), beg.reshape(shape))
+        lo = np.clip(lo.reshape(shape), beg, end)
+        hi = np.clip(hi.reshape(shape), lo, end)
+        ib = (ia + 1) % n_grid
+        col_b = cols[None, :] + (c0 == ppc - 1)[:, None]
+        ra, rb = (ia[:, None], cols[None, :]), (ib[:, None], col_b)
+        inside_a = prefix[ra + (hi,)] - prefix[ra + (lo,)]
+        inside_b = prefix[rb + (hi,)] - prefix[rb + (lo,)]
+        total = (1.0 - t) * inside_a + t * inside_b
+        for start, stop in ((beg, lo), (hi, end)):        # the two edge bands, by the full rule
+            width = int((stop - start).max(initial=0))
+            if width == 0:
+                continue
+            sl = start[:, :, None] + np.arange(width)[None, None, :]
+            valid = sl < stop[:, :, None]
+            sl = np.minimum(sl, e0.size - 1)
+            total += _band_sum(v, e0[sl], e1[sl], sl, valid, j, t, d_s, d_e, ia, ib, cols, col_b)
+        out[i] = total
+
+
+def _band_sum(v, e0, e1, sl, valid, j, t, d_s, d_e, ia, ib, cols, col_b):
+    """:func:`_points`' rule on the gathered slices ``sl`` (points, cols, k) of each point and column; slices
+    not ``valid`` add nothing."""
+    from datagen.stiffness import FRACTION_SNAP, cell_share
+
+    x0 = j[:, :, None] - e0 + 0.5
+    y0 = e1 - j[:, :, None] + 0.5
+    t3, d_s3, d_e3 = t[:, :, None], d_s[:, :, None], d_e[:, :, None]
+    v_a = v[ia[:, None, None], cols[None, :, None], sl]
+    v_b = v[ib[:, None, None], col_b[:, :, None], sl]
+    share = _lattice_interp(x0, t3 - d_s3) * _lattice_interp(y0, d_e3 - t3)
+    share[share < FRACTION_SNAP] = 0.0
+    share[share > 1.0 - FRACTION_SNAP] = 1.0
+    w_a = (1.0 - t3) * cell_share(x0 - d_s3, y0 + d_e3)
+    w_b = t3 * cell_share(x0 + 1.0 - d_s3, y0 - 1.0 + d_e3)
+    w = w_a + w_b
+    value = np.where(w > 0, (w_a * v_a + w_b * v_b) / np.where(w > 0, w, 1.0), (1.0 - t3) * v_a + t3 * v_b)
+    value = np.where(t3 == 0.0, v_a, value)
+    return np.where(valid, share * value, 0.0).sum(axis=2)
 
 
 def _points(v, edges, d_start, d_end, i, ppc: int, q: int) -> np.ndarray:
