@@ -99,7 +99,8 @@ def mesh_record(stiffness, effects, ctx) -> MeshRecord:
         def f(g, pt, wt):
             return sum(e.tooth_deviation_m(g, pt, wt, ctx) for e in tooth_fx)
 
-        e_force_slots = stiffness.weighted(f, n_cycles=P)
+        e_force_slots = stiffness.weighted(f, n_cycles=P, position_free=all(e.tooth_deviation_position_free
+                                                                             for e in tooth_fx))
         if centre_fx:   # the deviations of the nominal contact positions; the early pair has none before its start
             e_force_slots = refine_slots(e_force_slots, ppc, q)
     else:

@@ -113,7 +113,7 @@ class MeshStiffness:
                 k[s] = self._overrides[(m, s)][u]
         return k
 
-    def weighted(self, f, *, n_cycles: int | None = None) -> np.ndarray:
+    def weighted(self, f, *, n_cycles: int | None = None, position_free: bool = False) -> np.ndarray:
         """(n_cycles * ppc, n_slots): sum over slices of k_slice * f(g_m, pinion_tooth, wheel_tooth).
 
         ``f`` is vectorised over arrays of equal shape. With ``f`` a tooth-pair
@@ -122,14 +122,16 @@ class MeshStiffness:
         period) may be any length: engagement ``m = cycle - slot`` keeps its own
         pinion and wheel teeth (``m % z1``, ``m % z2``) while its stiffness repeats
         with the record's period, so a per-wheel-tooth deviation over a wheel
-        revolution needs no hunting-period record.
+        revolution needs no hunting-period record. ``position_free``: ``f`` does not depend on ``g`` (a whole
+        tooth displaced), so it is evaluated once per pair and weighted by the pair's stiffness, as on a spur pair
+        (the same sum to rounding; on a helical pair of 100 slices 100 times fewer evaluations).
         """
         P, ppc, S = self.period_cycles, self.positions_per_cycle, self.n_slots
         n_cycles = P if n_cycles is None else int(n_cycles)
         z1, z2 = self.pair.pinion.teeth, self.pair.wheel.teeth
         g = np.nan_to_num(self._g_cycle, nan=self.pair.contact_start_m)          # (ppc, S, n_slices)
         k_cycle, overrides = self._k_cycle, self._overrides
-        if self.pair.base_helix_angle_rad == 0.0:
+        if self.pair.base_helix_angle_rad == 0.0 or position_free:
             # spur: every slice of a pair sits at the same g, so f is evaluated once and weighted by the pair's k
             g, k_cycle = g[:, :, :1], k_cycle.sum(axis=2, keepdims=True)
             overrides = {key: kk.sum(axis=1, keepdims=True) for key, kk in overrides.items()}

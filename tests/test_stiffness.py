@@ -241,6 +241,28 @@ def test_weighted_of_one_is_pair_stiffness():
     np.testing.assert_allclose(ms.weighted(lambda g, p, w: np.ones_like(g)), ms.k_slots_n_per_m, rtol=1e-12)
 
 
+def test_position_free_deviation_weighted_per_pair_equals_per_slice():
+    """A deviation that does not depend on the contact position (a pitch error: one value per tooth) weighted
+    per pair (position_free, what datagen.mesh_excitation uses for such effects) equals the slice-by-slice sum
+    (rel 1e-12), on a pitted helical pair over two pinion revolutions; the pitch error declares itself so and the
+    profile error (a function of g) does not."""
+    from datagen.effects import get
+
+    pair = helical_pair_example()
+    ms = mesh_stiffness(pair, pits=_rect_pits(pair, 3, (10, 30), (5, 40)), positions_per_cycle=16, n_slices=40)
+    rng = np.random.default_rng(1)
+    tab1, tab2 = rng.normal(size=pair.pinion.teeth) * 1e-5, rng.normal(size=pair.wheel.teeth) * 1e-5
+
+    def f(g, p, w):
+        return tab1[p] + tab2[w] + 0.0 * g
+
+    n = 2 * pair.pinion.teeth
+    per_slice, per_pair = ms.weighted(f, n_cycles=n), ms.weighted(f, n_cycles=n, position_free=True)
+    assert np.abs(per_slice).max() > 0
+    np.testing.assert_allclose(per_pair, per_slice, rtol=1e-12, atol=1e-12 * np.abs(per_slice).max())
+    assert get("pitch_error").tooth_deviation_position_free and not get("profile_error").tooth_deviation_position_free
+
+
 def test_slice_level_results_agree_with_pair_totals():
     """Per-slice API: slice stiffness summed over slices = per-pair stiffness (rel 1e-12), and every slice in
     contact lies on the path of contact [A, E] with NaN exactly where the slice carries nothing healthy."""

@@ -295,6 +295,11 @@ class Effect:
         """Mesh cycles after which this effect's deviation repeats (default 1)."""
         return 1
 
+    #: True when :meth:`tooth_deviation_m` does not depend on the contact position ``g_m`` (a whole tooth
+    #: displaced, as a pitch error): the record then weights each pair's deviation by the pair's stiffness
+    #: instead of slice by slice (:meth:`datagen.stiffness.MeshStiffness.weighted`, ``position_free``)
+    tooth_deviation_position_free = False
+
     def tooth_deviation_m(self, g_m: np.ndarray, pinion_tooth: np.ndarray, wheel_tooth: np.ndarray,
                           ctx: EffectContext) -> np.ndarray:
         """Deviation (m) at line-of-action position ``g_m`` (from T1) on the given teeth."""

@@ -101,6 +101,8 @@ class PitchError(Effect):
     #: the displaced tooth is given in units of the grade's f_pt: grade and single_tooth_factor trade off
     #: along a valley, so only the grade is fitted (and which gear)
     fit_parameters = ("grade", "gears")
+    #: a tooth's pitch deviation displaces the whole flank: the same at every contact position
+    tooth_deviation_position_free = True
     grade: float = field(default=6.0, metadata={"unit": "-", "bounds": GRADE_RANGE})
     phase_rad: float = field(default=0.0, metadata={"unit": "rad", "bounds": (-math.pi, math.pi)})
     single_tooth_factor: float = field(default=0.0, metadata={"unit": "-", "bounds": (0.0, 5.0)})
