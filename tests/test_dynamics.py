@@ -323,6 +323,42 @@ def test_batching_does_not_change_results():
                                        atol=1e-9 * np.abs(alone.channels[k]).max(), err_msg=k)
 
 
+@pytest.mark.parametrize("helical", [False, True])
+def test_cycles_differing_in_error_force_only_share_their_homogeneous_map(monkeypatch, helical):
+    """A pitch error on the pinion makes every mesh cycle of a revolution distinct in its error force, while the
+    stiffness differs only on the pitted tooth's cycles (spur: one pitted tooth) or nowhere (helical, healthy).
+    The periodic path marches the homogeneous one-cycle map once per distinct stiffness and one particular
+    column per further error force (datagen.shooting._cycle_maps). Reference: the same path with every distinct
+    cycle's map marched in full (SHARE_PHI False, the former method): every channel within 1e-9 of its largest
+    value; and the full maps are marched for the distinct stiffnesses only (fails if the sharing is lost)."""
+    from datagen import shooting
+    from datagen.pits import PitSpec
+
+    pair = helical_pair_example() if helical else SPUR
+    pits = {} if helical else dict(pits=PitSpec(shape="ellipse", teeth=(3,), severity=(0.2,)), pit_grid=(32, 32))
+    case = Case(pair=pair, operating=OperatingPoint(1500.0, TORQUE), duration_s=0.1, fs_hz=20000.0,
+                effects=({"name": "pitch_error", "grade": 8.0, "gears": "pinion"},),
+                solver=SolverOptions(method="periodic"), **pits)
+    full_rows = []
+    march = shooting._march_columns
+
+    def counted(*args, units):
+        if units:
+            full_rows.append(len(args[7]))
+        return march(*args, units=units)
+    monkeypatch.setattr(shooting, "_march_columns", counted)
+    shared = simulate([case])[0]
+    n_shared = full_rows.pop()
+    monkeypatch.setattr(shooting, "SHARE_PHI", False)
+    alone = simulate([case])[0]
+    n_full = full_rows.pop()
+    assert n_full == pair.pinion.teeth and n_shared < n_full, (n_shared, n_full)
+    assert n_shared == 1 if helical else 2 <= n_shared <= 5, n_shared
+    for k in alone.channels:
+        np.testing.assert_allclose(shared.channels[k], alone.channels[k], rtol=0,
+                                   atol=1e-9 * np.abs(alone.channels[k]).max(), err_msg=k)
+
+
 def test_pitted_tooth_shows_once_per_revolution():
     """A pitted pinion tooth puts energy on the pinion shaft orders between the mesh harmonics (spur paper,
     Figs 21-22: sidebands at fr around the mesh lines). Fraction of the housing-acceleration energy on
