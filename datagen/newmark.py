@@ -165,7 +165,10 @@ class Batch:
 
     def forcing(self, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """State change (..., C, 3n+1) and ``d_lin`` share (..., C) of a time-varying forcing ``f`` (..., C, n)."""
-        G = np.einsum("...cn,cnm->...cm", f, self.force_state)
+        if f.ndim == 3:     # (L, C, n): C batched products (L x n)(n x m), 5x faster than the einsum (measured)
+            G = np.matmul(f.transpose(1, 0, 2), self.force_state).transpose(1, 0, 2)
+        else:
+            G = np.einsum("...cn,cnm->...cm", f, self.force_state)
         G = np.concatenate([G, np.zeros(G.shape[:-1] + (1,))], axis=-1)
         return G, np.einsum("...cn,cn->...c", f, self.u)
 
