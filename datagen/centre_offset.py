@@ -188,7 +188,8 @@ def _points_banded(out, v, edges, d_start, d_end, ppc: int, q: int) -> None:
     stagger, so at one point the slices of one engagement fall into consecutive runs: out of contact (share 0:
     either edge factor is 0), inside (both edge factors and both cell shares are 1, so the value is the linear
     interpolation ``(1 - t) v_a + t v_b``), and the two edge bands between them. The inside run is summed from
-    prefix sums of ``v`` over the slices; only the edge bands (a few slices each) take :func:`_points`' full rule.
+    running sums of ``v`` over the slices (made in place: ``v`` is overwritten); only the edge bands (a few
+    slices each) take :func:`_points`' full rule, on values taken back from the running sums.
     The run bounds come from the conditions of that rule solved for the slice's edge (``searchsorted``), with a
     margin of :data:`_BAND_MARGIN` steps: a slice near a bound goes to a band, where the full rule decides."""
     n_grid, n_cols = v.shape[0], v.shape[1] - 1
@@ -199,8 +200,14 @@ def _points_banded(out, v, edges, d_start, d_end, ppc: int, q: int) -> None:
         e0, e1, v = e0[order], e1[order], v[:, :, order]
     if np.any(np.diff(e1) < 0):      # the contact length is the same on every slice, so e1 follows e0
         raise ValueError("slots_at_centre_offset: contact ends not in the order of the contact starts")
-    prefix = np.zeros(v.shape[:2] + (v.shape[2] + 1,))
-    np.cumsum(v, axis=2, out=prefix[:, :, 1:])
+    # the running sums over the slices, in place (``v`` is this call's own array; no second copy of its size):
+    # v[..., s] becomes the sum of slices 0..s, and a slice's own value is the difference of two of them
+    np.cumsum(v, axis=2, out=v)
+    cum = v
+
+    def upto(rows: tuple, k):
+        """Sum of slices ``0 .. k - 1`` at ``rows`` (0 for k = 0)."""
+        return np.where(k > 0, cum[rows + (np.maximum(k - 1, 0),)], 0.0)
     cols = np.arange(n_cols)
     for r0 in range(0, out.shape[0], _BANDED_BLOCK_POINTS):
         i = np.arange(r0, min(r0 + _BANDED_BLOCK_POINTS, out.shape[0]))
@@ -223,8 +230,8 @@ def _points_banded(out, v, edges, d_start, d_end, ppc: int, q: int) -> None:
         ib = (ia + 1) % n_grid
         col_b = cols[None, :] + (c0 == ppc - 1)[:, None]
         ra, rb = (ia[:, None], cols[None, :]), (ib[:, None], col_b)
-        inside_a = prefix[ra + (hi,)] - prefix[ra + (lo,)]
-        inside_b = prefix[rb + (hi,)] - prefix[rb + (lo,)]
+        inside_a = upto(ra, hi) - upto(ra, lo)
+        inside_b = upto(rb, hi) - upto(rb, lo)
         total = (1.0 - t) * inside_a + t * inside_b
         for start, stop in ((beg, lo), (hi, end)):        # the two edge bands, by the full rule
             width = int((stop - start).max(initial=0))
@@ -233,20 +240,20 @@ def _points_banded(out, v, edges, d_start, d_end, ppc: int, q: int) -> None:
             sl = start[:, :, None] + np.arange(width)[None, None, :]
             valid = sl < stop[:, :, None]
             sl = np.minimum(sl, e0.size - 1)
-            total += _band_sum(v, e0[sl], e1[sl], sl, valid, j, t, d_s, d_e, ia, ib, cols, col_b)
+            v_a = upto((ia[:, None, None], cols[None, :, None]), sl + 1) - upto((ia[:, None, None], cols[None, :, None]), sl)
+            v_b = upto((ib[:, None, None], col_b[:, :, None]), sl + 1) - upto((ib[:, None, None], col_b[:, :, None]), sl)
+            total += _band_sum(v_a, v_b, e0[sl], e1[sl], valid, j, t, d_s, d_e)
         out[i] = total
 
 
-def _band_sum(v, e0, e1, sl, valid, j, t, d_s, d_e, ia, ib, cols, col_b):
-    """:func:`_points`' rule on the gathered slices ``sl`` (points, cols, k) of each point and column; slices
-    not ``valid`` add nothing."""
+def _band_sum(v_a, v_b, e0, e1, valid, j, t, d_s, d_e):
+    """:func:`_points`' rule on gathered slices (points, cols, k) of each point and column: their grid samples
+    ``v_a``, ``v_b`` and edges ``e0``, ``e1``; slices not ``valid`` add nothing."""
     from datagen.stiffness import FRACTION_SNAP, cell_share
 
     x0 = j[:, :, None] - e0 + 0.5
     y0 = e1 - j[:, :, None] + 0.5
     t3, d_s3, d_e3 = t[:, :, None], d_s[:, :, None], d_e[:, :, None]
-    v_a = v[ia[:, None, None], cols[None, :, None], sl]
-    v_b = v[ib[:, None, None], col_b[:, :, None], sl]
     share = _lattice_interp(x0, t3 - d_s3) * _lattice_interp(y0, d_e3 - t3)
     share[share < FRACTION_SNAP] = 0.0
     share[share > 1.0 - FRACTION_SNAP] = 1.0
