@@ -16,7 +16,7 @@ import pytest
 
 from datagen.effects import EffectContext, get
 from datagen.geometry import preset
-from datagen.stiffness import mesh_stiffness
+from datagen.stiffness import face_slices, mesh_stiffness
 
 
 def _reference(pair, ppc: int, dx: float, dy: float):
@@ -297,7 +297,10 @@ def test_banded_slice_sums_equal_the_slice_by_slice_rule(ppc, edges, pitted, q):
 
     pair = preset("helical-dct")
     ms = mesh_stiffness(pair, pits=_rect_pit(pair) if pitted else None, positions_per_cycle=ppc, edges=edges)
-    assert ms.n_slices >= co.BANDED_MIN_SLICES          # the banded path is the one taken
+    h = pair.base_pitch_m / ppc
+    _, _, shift = face_slices(pair, ms.n_slices)
+    assert co.banded_pays(shift / h, ms.n_slices)       # the banded path is the one taken
+    assert not co.banded_pays(np.zeros(200), 200)       # a spur pair's pixel slices keep the slice-by-slice sum
     n = ms.period_cycles * ppc * q
     th = 2 * np.pi * np.arange(n) / n * 1.3 + 0.4
     for amp, toward in ((0.0, 0.0), (0.3e-6, 0.0), (30e-6, 0.0), (150e-6, -100e-6)):
