@@ -104,6 +104,12 @@ class FirDecimator:
             buf = np.concatenate([buf, np.zeros((need - buf.shape[0],) + buf.shape[1:])])
         flat = buf[:need].reshape(F, R, -1)
         Q = flat.shape[2]
+        if Q == 1:
+            # one column would be a matrix-vector product, which BLAS sums in another order than the
+            # matrix-matrix one (2e-16 apart): padded, a channel's output does not depend on how many are decimated
+            # with it (a chaotic model's record and its realisations' batch must agree to the bit, tests)
+            return self._filter(np.concatenate([buf[:need].reshape(need, 1), np.zeros((need, 1))], axis=1),
+                                n_out)[:, :1].reshape((n_out,) + buf.shape[1:])
         out = np.empty((n_out, Q))
         step = max(1, int(DECIMATION_BLOCK_BYTES // (8 * F * M)))
         for q0 in range(0, Q, step):

@@ -74,6 +74,8 @@ class DynamicCase:
     transient_s: float | None = None
     mesh_angle: str = "dynamic"
     step_limit: str = "position"
+    #: the solver's channels this case's output needs (:func:`datagen.simulate.solver_channels`); None: all
+    channels: frozenset | None = None
 
     @property
     def n_out(self) -> int:
@@ -197,6 +199,13 @@ def _solve(cases: list[DynamicCase]) -> list[Response]:
             for i, r in zip(sub, res):
                 out[i] = r
     return out
+
+
+def wanted_channels(cases) -> set | None:
+    """The union of the channels the cases of a batch need (None: every channel)."""
+    if any(c.channels is None for c in cases):
+        return None
+    return set().union(*(c.channels for c in cases))
 
 
 def _merge_step_counts(items: dict[int, tuple[int, int, int]], slack: float = 1.15) -> dict[int, int]:

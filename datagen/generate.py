@@ -40,11 +40,12 @@ class ShardResult:
     cpu_seconds: float
 
 
-def simulate_batch(cases: list) -> list:
-    """The one call into the simulator (:func:`datagen.simulate.simulate`), vectorised over ``cases``."""
+def simulate_batch(cases: list, channels=None) -> list:
+    """The one call into the simulator (:func:`datagen.simulate.simulate`), vectorised over ``cases``; only
+    ``channels`` are made (each the same to the bit as among all)."""
     from datagen.simulate import simulate
 
-    return simulate(cases)
+    return simulate(cases, channels=channels)
 
 
 def build_case(sweep: Sweep, spec, pit_map):
@@ -72,12 +73,12 @@ def compute_shard(sweep: Sweep, shard: int) -> ShardResult:
     with threadpool_limits(1):
         specs = [draw_sample(sweep, i) for i in shard_samples(sweep, shard)]
         maps = [build_pit_map(sweep, s) for s in specs]
-        signals = simulate_batch([build_case(sweep, s, m) for s, m in zip(specs, maps)])
+        signals = simulate_batch([build_case(sweep, s, m) for s, m in zip(specs, maps)], sweep.channels)
         if sweep.healthy_reference:
             # each sample's healthy twin, in a batch of their own: a batch shares its solver passes (they stop
             # when every case of the batch has converged), so with the twins beside them the records would move
             # (~1e-3 of their RMS) from what the sweep without twins stores
-            signals += simulate_batch([build_case(sweep, healthy_twin(sweep, s), None) for s in specs])
+            signals += simulate_batch([build_case(sweep, healthy_twin(sweep, s), None) for s in specs], sweep.channels)
     n_ch = len(sweep.channels)
     out = np.empty((len(specs), len(sweep.stored_channels), sweep.n_time), np.float32)
     for k, sig in enumerate(signals):

@@ -35,27 +35,49 @@ def channel_coefficients(cases) -> dict:
     return co
 
 
-def channel_values(traj: np.ndarray, force: np.ndarray, omega: np.ndarray, co: dict) -> np.ndarray:
+def fine_names(n: int, wanted=None) -> list[str]:
+    """The fine-rate channels (:func:`channel_names` order) that make the output channels ``wanted`` (a set of
+    names; None: every channel). A ``tacho_*`` pulse needs its shaft's ``_phi`` channel."""
+    names = channel_names(n)
+    if wanted is None:
+        return names
+    need = set(wanted)
+    if "tacho_pinion" in need:
+        need.add("_phi_1")
+    if "tacho_wheel" in need:
+        need.add("_phi_2")
+    return [nm for nm in names if nm in need] or names   # none of them (unknown names): all, so the error lists them
+
+
+def channel_values(traj: np.ndarray, force: np.ndarray, omega: np.ndarray, co: dict,
+                   names: list[str] | None = None) -> np.ndarray:
     """Fine-rate channels (C, n_ch, L) from states (C, 3n, L), mesh force (C, L) and pinion reference
-    speed (rad/s, broadcastable to (C, L))."""
+    speed (rad/s, broadcastable to (C, L)); ``names`` (default: :func:`channel_names`) picks and orders them."""
     n, ix = co["n"], co["ix"]
     q, qd, qdd = traj[:, :n], traj[:, n:2 * n], traj[:, 2 * n:]
 
     def c(name):
         return co[name][:, None]
 
-    cols = [qdd[:, ix["y_1"]], qdd[:, ix["y_2"]],
-            c("k_y_1") * q[:, ix["y_1"]] + c("c_y_1") * qd[:, ix["y_1"]],
-            c("k_y_2") * q[:, ix["y_2"]] + c("c_y_2") * qd[:, ix["y_2"]]]
-    if n == 8:
-        cols += [qdd[:, ix["z_1"]], qdd[:, ix["z_2"]],
-                 c("k_z_1") * q[:, ix["z_1"]] + c("c_z_1") * qd[:, ix["z_1"]],
-                 c("k_z_2") * q[:, ix["z_2"]] + c("c_z_2") * qd[:, ix["z_2"]]]
+    def bearing(d):
+        return lambda: c(f"k_{d}") * q[:, ix[d]] + c(f"c_{d}") * qd[:, ix[d]]
+
     rpm = 60.0 / (2 * np.pi)
-    cols += [c("rb1") * q[:, ix["phi_1"]] - c("rb2") * q[:, ix["phi_2"]], np.einsum("cil,ci->cl", q, co["v"]), force,
-             (omega + qd[:, ix["phi_1"]]) * rpm, (omega * c("gear_ratio") + qd[:, ix["phi_2"]]) * rpm,
-             q[:, ix["phi_1"]], q[:, ix["phi_2"]]]
-    return np.stack(cols, axis=1)
+    make = {"acc_pinion_loa_m_s2": lambda: qdd[:, ix["y_1"]], "acc_wheel_loa_m_s2": lambda: qdd[:, ix["y_2"]],
+            "force_bearing_pinion_loa_n": bearing("y_1"), "force_bearing_wheel_loa_n": bearing("y_2"),
+            "dte_m": lambda: c("rb1") * q[:, ix["phi_1"]] - c("rb2") * q[:, ix["phi_2"]],
+            "mesh_deflection_m": lambda: np.einsum("cil,ci->cl", q, co["v"]),
+            "mesh_force_n": lambda: force,
+            "speed_pinion_rpm": lambda: (omega + qd[:, ix["phi_1"]]) * rpm,
+            "speed_wheel_rpm": lambda: (omega * c("gear_ratio") + qd[:, ix["phi_2"]]) * rpm,
+            "_phi_1": lambda: q[:, ix["phi_1"]], "_phi_2": lambda: q[:, ix["phi_2"]]}
+    if n == 8:
+        make.update({"acc_pinion_axial_m_s2": lambda: qdd[:, ix["z_1"]],
+                     "acc_wheel_axial_m_s2": lambda: qdd[:, ix["z_2"]],
+                     "force_bearing_pinion_axial_n": bearing("z_1"), "force_bearing_wheel_axial_n": bearing("z_2")})
+    names = channel_names(n) if names is None else names
+    L = traj.shape[2]
+    return np.stack([np.broadcast_to(make[nm](), (traj.shape[0], L)) for nm in names], axis=1)
 
 
 def tacho(theta: np.ndarray) -> np.ndarray:
@@ -67,11 +89,11 @@ def tacho(theta: np.ndarray) -> np.ndarray:
 
 
 def finish(values: np.ndarray, names: list[str], theta1: np.ndarray, ratio: float) -> dict:
-    """Per-case dict of output channels (rows of ``values``, (n_ch, n_out)) incl. tacho pulses;
-    internal ``_phi`` channels dropped."""
+    """Per-case dict of output channels (rows of ``values``, (n_ch, n_out)) incl. the tacho pulses of the shafts
+    whose ``_phi`` channel is among ``names``; internal ``_phi`` channels dropped."""
     ch = {nm: values[j] for j, nm in enumerate(names) if not nm.startswith("_")}
-    th1 = theta1 + values[names.index("_phi_1")]
-    th2 = theta1 * ratio + values[names.index("_phi_2")]
-    ch["tacho_pinion"] = tacho(th1)
-    ch["tacho_wheel"] = tacho(th2)
+    if "_phi_1" in names:
+        ch["tacho_pinion"] = tacho(theta1 + values[names.index("_phi_1")])
+    if "_phi_2" in names:
+        ch["tacho_wheel"] = tacho(theta1 * ratio + values[names.index("_phi_2")])
     return ch

@@ -31,8 +31,8 @@ import numpy as np
 
 from datagen import newmark
 from datagen.decimation import resample_periodic
-from datagen.dynamics import Response, mesh_damping, static_state
-from datagen.output_channels import channel_coefficients, channel_names, channel_values, finish
+from datagen.dynamics import Response, mesh_damping, static_state, wanted_channels
+from datagen.output_channels import channel_coefficients, channel_values, finish, fine_names
 
 
 #: the periodic path evaluates the mesh at the pinion's actual angle (nominal rotation plus its dynamic angle
@@ -109,8 +109,8 @@ def periodic_response(cases, P: int, n_c: int) -> list[Response]:
     periodicity = np.where(converged, periodicity, first[2])
     co = channel_coefficients(cases)
     omega = np.array([2 * np.pi * c.speed_rpm / 60.0 for c in cases])
-    fine = channel_values(traj, force, omega[:, None], co)      # (C, n_ch, N), sample j at time j dt
-    names = channel_names(n)
+    names = fine_names(n, wanted_channels(cases))
+    fine = channel_values(traj, force, omega[:, None], co, names)      # (C, n_ch, N), sample j at time j dt
     out: list[Response | None] = [None] * C
     groups: dict[tuple, list[int]] = {}
     for j, c in enumerate(cases):

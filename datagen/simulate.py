@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Sequence
 
@@ -289,12 +289,36 @@ def effect_rng(seed: int, position: int) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(1000 + position,)))
 
 
-def simulate(cases: Sequence[Case]) -> list[Signals]:
-    """Simulate cases; those sharing DOF count and time grid advance together as one batch."""
+def solver_channels(effects, wanted) -> frozenset | None:
+    """The solver channels that make the output channels ``wanted`` through the output hooks of ``effects``
+    (applied in order: every ``output_path``, then every ``measurement``; walked back from the last), by each
+    effect's :meth:`Effect.channels_read`; None (every channel) when ``wanted`` is None or an effect reads all."""
+    if wanted is None:
+        return None
+    need = frozenset(wanted)
+    chain = ([e for e in effects if "output_path" in e.hooks()] + [e for e in effects if "measurement" in e.hooks()])
+    for e in reversed(chain):
+        need = e.channels_read(need)
+        if need is None:
+            return None
+    return frozenset(need)
+
+
+def simulate(cases: Sequence[Case], channels: Sequence[str] | None = None, *,
+             channels_field: str = "channels") -> list[Signals]:
+    """Simulate cases; those sharing DOF count and time grid advance together as one batch.
+
+    ``channels``: the output channels needed (default: all). The solver then makes and decimates only what they
+    are made of (:func:`solver_channels`), and the result may hold no others; each asked channel is the same to
+    the bit as in a simulation of every channel (tests/test_simulate.py). A name that is no channel of a case
+    is an error (naming ``channels_field``), after the simulation.
+    """
     cases = list(cases)
     for i, c in enumerate(cases):
         require(isinstance(c, Case), f"cases[{i}]", type(c).__name__, "a Case")
     prepared = [prepare(c) for c in cases]
+    if channels is not None:
+        prepared = [replace(dc, channels=solver_channels(c.effects, channels)) for c, dc in zip(cases, prepared)]
     responses = dynamics.solve(prepared)
     out = []
     for c, dc, r in zip(cases, prepared, responses):
@@ -313,6 +337,12 @@ def simulate(cases: Sequence[Case]) -> list[Signals]:
                 "mean_mesh_stiffness_n_per_m": dc.model.k_mean_n_per_m}
         out.append(Signals(channels={k: np.asarray(v, dtype=np.float64) for k, v in ch.items()}, fs_hz=c.fs_hz,
                            metadata=meta))
+    if channels is not None:
+        for i, s in enumerate(out):
+            for name in channels:
+                if name not in s.channels:
+                    full = simulate([cases[i]])[0].channels      # the error's list: every channel
+                    require(False, channels_field, name, "a simulated channel: " + ", ".join(sorted(full)))
     return out
 
 

@@ -23,10 +23,10 @@ import numpy as np
 
 from datagen import newmark
 from datagen.decimation import FirDecimator
-from datagen.dynamics import CHUNK, Response, mesh_damping, static_state
+from datagen.dynamics import CHUNK, Response, mesh_damping, static_state, wanted_channels
 from datagen.effects.base import MeshState
 from datagen.mesh_excitation import MeshRecords
-from datagen.output_channels import channel_coefficients, channel_names, channel_values, finish
+from datagen.output_channels import channel_coefficients, channel_values, finish, fine_names
 
 #: run the time-stepping loop compiled where the batch's mesh laws allow it (:mod:`datagen.compiled_stepping`);
 #: False: the numpy loop of :func:`datagen.newmark.run_general` (the reference the tests compare against)
@@ -138,7 +138,7 @@ def transient_response(cases, R: int, n_discard: int) -> list[Response]:
     S0 = newmark.consistent_states(ops, x_init, f0, k0, E0, c_m, np.ones(1))[:, 0]
 
     co = channel_coefficients(cases)
-    names = channel_names(n)
+    names = fine_names(n, wanted_channels(cases))
     kept, theta_out = [], []
     bad_total = 0
     first = n_discard - D
@@ -158,7 +158,7 @@ def transient_response(cases, R: int, n_discard: int) -> list[Response]:
         sel = steps >= first
         if not np.any(sel):
             continue
-        fine = channel_values(traj[sel].transpose(1, 2, 0), force[sel].T, theta_steps["omega"][sel].T, co)  # (C, Q, l)
+        fine = channel_values(traj[sel].transpose(1, 2, 0), force[sel].T, theta_steps["omega"][sel].T, co, names)  # (C, Q, l)
         kept.append(dec.push(fine.reshape(-1, fine.shape[2]).T))
         out_rows = (steps - n_discard) % R == 0
         out_rows &= steps >= n_discard

@@ -359,6 +359,17 @@ class Effect:
         """Apply the measurement chain (default: unchanged)."""
         return channels
 
+    def channels_read(self, wanted: frozenset) -> frozenset | None:
+        """The channels hooks 6-7 of this effect read to give the channels ``wanted``; None: every channel.
+
+        A simulation asked for a few channels (:func:`datagen.simulate.simulate` ``channels``) makes and decimates
+        only what its effects' hooks read, walking them from the last to the first. Default: ``wanted`` when the
+        effect overrides neither hook, None (every channel, as if nothing were asked) when it overrides one and
+        does not say what it reads: a plugin's output hook always sees the channels it saw before.
+        """
+        hooks = self.hooks()
+        return None if ("output_path" in hooks or "measurement" in hooks) else frozenset(wanted)
+
 
 # the registry and effect specs live in datagen.effects.registry; re-exported here, where effect modules and users'
 # plugins import them from (module docstring)

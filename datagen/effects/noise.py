@@ -49,6 +49,15 @@ class Noise(Effect):
             out[key] = x + n * rms * 10.0 ** (-self.snr_db / 20.0)
         return out
 
+    def channels_read(self, wanted):
+        """Every acceleration (their noise is drawn from one generator in sorted order, so each draw depends on
+        which of them exist); with ``channels = "all"`` every channel."""
+        from datagen.output_channels import channel_names
+
+        if self.channels != "acceleration":
+            return None
+        return frozenset(wanted) | {k for k in channel_names(8) if k.startswith("acc_")}
+
 
 #: PSD exponent alpha of each noise colour (PSD ~ 1 / f^alpha)
 COLOUR_EXPONENT = {"white": 0.0, "pink": 1.0, "brown": 2.0}

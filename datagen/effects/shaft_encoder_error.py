@@ -108,3 +108,8 @@ class ShaftEncoderError(Effect):
         out[TE_CHANNEL] = (te + rb1 * self.pinion_rad * np.sin(th1 + self.pinion_phase_rad)
                            - rb2 * self.wheel_rad * np.sin(th2 + self.wheel_phase_rad))
         return out
+
+    def channels_read(self, wanted):
+        """The transmission error is corrected with the shafts' angles, integrated from their speeds."""
+        extra = {"speed_pinion_rpm", "speed_wheel_rpm"} if TE_CHANNEL in wanted else set()
+        return frozenset(wanted) | extra

@@ -125,3 +125,8 @@ class TransmissionPath(Effect):
             out[acc_key] = housing_response(channels[force_key], fs_hz, self.housing_mass_kg,
                                             self.housing_frequency_hz, self.housing_damping_ratio)
         return out
+
+    def channels_read(self, wanted):
+        """A housing acceleration is made from its bearing force alone (a solver channel exists with its force:
+        the axial pair of each on helical pairs only); the other channels pass."""
+        return frozenset(k for k in wanted if k not in {a for _, a in PATHS}) | {f for f, a in PATHS if a in wanted}
