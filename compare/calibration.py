@@ -397,12 +397,12 @@ def _evaluate(ref, model, params, pts, extra_effects, seed, solver, counter, vie
         cases.append(mm.case(m.pair, speed_rpm=ref.speed.speed_rpm, torque_nm=m.torque_nm, duration_s=dur,
                              fs_hz=m.fs_hz, seed=seed, extra_effects=extra, solver=solver))
     try:
-        sigs = simulate(cases)
+        sigs = simulate(cases, channels=(model.sensor,))
     except (GearpitError, FloatingPointError, np.linalg.LinAlgError):
         sigs = []
         for c in cases:
             try:
-                sigs += simulate([c])
+                sigs += simulate([c], channels=(model.sensor,))
             except (GearpitError, FloatingPointError, np.linalg.LinAlgError):
                 sigs.append(None)
     counter[0] += len(cases)

@@ -49,6 +49,33 @@ def fine_names(n: int, wanted=None) -> list[str]:
     return [nm for nm in names if nm in need] or names   # none of them (unknown names): all, so the error lists them
 
 
+def state_rows(n: int, ix: dict, names: list[str]) -> list[int]:
+    """The components of the Newmark state ``(q, q', q'')`` (3n) that :func:`channel_values` reads to make
+    ``names`` (sorted)."""
+    q, qd, qdd = (lambda d: ix[d]), (lambda d: n + ix[d]), (lambda d: 2 * n + ix[d])
+    dof = {"pinion_loa": "y_1", "wheel_loa": "y_2", "pinion_axial": "z_1", "wheel_axial": "z_2"}
+    need = set()
+    for nm in names:
+        if nm.startswith("acc_"):
+            need.add(qdd(dof[nm[4:].rsplit("_m_s2", 1)[0]]))
+        elif nm.startswith("force_bearing_"):
+            d = dof[nm[len("force_bearing_"):].rsplit("_n", 1)[0]]
+            need |= {q(d), qd(d)}
+        elif nm == "dte_m":
+            need |= {q("phi_1"), q("phi_2")}
+        elif nm == "mesh_deflection_m":
+            need |= set(range(n))
+        elif nm == "speed_pinion_rpm":
+            need.add(qd("phi_1"))
+        elif nm == "speed_wheel_rpm":
+            need.add(qd("phi_2"))
+        elif nm == "_phi_1":
+            need.add(q("phi_1"))
+        elif nm == "_phi_2":
+            need.add(q("phi_2"))
+    return sorted(need)
+
+
 def channel_values(traj: np.ndarray, force: np.ndarray, omega: np.ndarray, co: dict,
                    names: list[str] | None = None) -> np.ndarray:
     """Fine-rate channels (C, n_ch, L) from states (C, 3n, L), mesh force (C, L) and pinion reference

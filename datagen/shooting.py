@@ -32,7 +32,7 @@ import numpy as np
 from datagen import newmark
 from datagen.decimation import resample_periodic
 from datagen.dynamics import Response, mesh_damping, static_state, wanted_channels
-from datagen.output_channels import channel_coefficients, channel_values, finish, fine_names
+from datagen.output_channels import channel_coefficients, channel_values, fine_names, finish, state_rows
 
 
 #: the periodic path evaluates the mesh at the pinion's actual angle (nominal rotation plus its dynamic angle
@@ -84,21 +84,27 @@ def periodic_response(cases, P: int, n_c: int) -> list[Response]:
     mesh = _mesh_samples(cases, x)
     maps, inverse, distinct = _cycle_maps(ops, f, c_m, mesh, n)
     starts = _fixed_point_starts(maps, inverse)
-    traj, force, ends = _march(ops, f, c_m, mesh, starts)
+    # only the state components the output channels and the mesh angle read are stored (bit-equal: copies)
+    wanted = wanted_channels(cases)
+    names = fine_names(n, wanted)
+    keep = (np.arange(3 * n) if wanted is None else
+            np.array(sorted(set(state_rows(n, {d: i for i, d in enumerate(cases[0].model.dofs)}, names)) | {i_phi1})))
+    store = None if wanted is None else keep
+    traj, force, ends = _march(ops, f, c_m, mesh, starts, store)
     periodicity = _defect(starts, ends)
     passes = 1
     change = np.zeros(C)
     first = (traj, force, periodicity)
     while dynamic.any():
         # step i (1..N) of the period is row i % N of traj
-        angle = z1_per_rad[:, None] * np.roll(traj[:, i_phi1, :], -1, axis=-1)
+        angle = z1_per_rad[:, None] * np.roll(traj[:, int(np.searchsorted(keep, i_phi1)), :], -1, axis=-1)
         x_new = np.where(dynamic[:, None, None], nominal[None] + angle.reshape(C, P, n_c), x)
         change = np.abs(x_new - x).max(axis=(1, 2))
         if np.all(change <= ANGLE_TOL_CYCLES) or passes == MAX_ANGLE_PASSES:
             break
         x, passes = x_new, passes + 1
         mesh = _mesh_samples(cases, x)
-        traj, force, starts, periodicity = _reshoot(ops, f, c_m, mesh, starts, maps, inverse)
+        traj, force, starts, periodicity = _reshoot(ops, f, c_m, mesh, starts, maps, inverse, store)
     swing = (x - nominal[None]).max(axis=(1, 2)) - (x - nominal[None]).min(axis=(1, 2))
     # a case whose angle did not settle within the passes (seen with grade-8 pitch errors, swings of ~0.1 cycle:
     # the iteration does not contract there) keeps the first pass, a consistent solution at the nominal rotation,
@@ -109,8 +115,9 @@ def periodic_response(cases, P: int, n_c: int) -> list[Response]:
     periodicity = np.where(converged, periodicity, first[2])
     co = channel_coefficients(cases)
     omega = np.array([2 * np.pi * c.speed_rpm / 60.0 for c in cases])
-    names = fine_names(n, wanted_channels(cases))
-    fine = channel_values(traj, force, omega[:, None], co, names)      # (C, n_ch, N), sample j at time j dt
+    full = np.zeros((C, 3 * n, traj.shape[2]))          # the rows not stored stay unread (and untouched)
+    full[:, keep] = traj
+    fine = channel_values(full, force, omega[:, None], co, names)      # (C, n_ch, N), sample j at time j dt
     out: list[Response | None] = [None] * C
     groups: dict[tuple, list[int]] = {}
     for j, c in enumerate(cases):
@@ -248,10 +255,11 @@ def _fixed_point_starts(maps, inverse):
     return _cyclic_states(Phi_q, inverse, p_q[inverse])
 
 
-def _march(ops, f, c_m, mesh, starts):
+def _march(ops, f, c_m, mesh, starts, keep=None):
     """Every cycle of every case from its start state, side by side (one batch row per cycle: a Python loop of
     ``n_c`` steps instead of ``P n_c``). Returns ``traj`` (C, 3n, N) and ``force`` (C, N), sample ``j`` at time
-    ``j dt`` of the period, and each cycle's end state (C, P, 2n)."""
+    ``j dt`` of the period, and each cycle's end state (C, P, 2n); ``keep``: the state components stored in
+    ``traj`` (default all)."""
     kc, Ec = mesh["k"], mesh["E"]
     C, P, n_c = kc.shape
     n2 = starts.shape[2]
@@ -263,7 +271,7 @@ def _march(ops, f, c_m, mesh, starts):
     k_r = np.ascontiguousarray(kc.reshape(C * P, n_c).T)
     E_r = np.ascontiguousarray(Ec.reshape(C * P, n_c).T) if Ec is not None else None
     S_end, traj, force = newmark.run_linear(batch, s0, k_r, c_m[case_of], E_r, np.ones(1), store=True,
-                                            store_shift=1, groups=P)
+                                            store_shift=1, groups=P, store_rows=keep)
     # step i < n_c of cycle cy is time cy n_c + i of the period, stored in place; its last step (time (cy + 1) n_c)
     # landed in the cycle's own first sample and belongs to the next cycle's
     traj[..., 0] = np.roll(traj[..., 0], 1, axis=-1)
@@ -280,7 +288,7 @@ def _defect(starts, ends):
     return np.maximum(d, np.abs(starts[:, -1] - starts[:, 0]).max(axis=1)) / scale
 
 
-def _reshoot(ops, f, c_m, mesh, starts, maps, inverse):
+def _reshoot(ops, f, c_m, mesh, starts, maps, inverse, keep=None):
     """Periodic solution for new mesh samples by multiple shooting over the cycles, from the previous start states,
     with the maps of another solution (close to this one's) as the Jacobian.
 
@@ -293,7 +301,7 @@ def _reshoot(ops, f, c_m, mesh, starts, maps, inverse):
     P = inverse.shape[1]
     s = starts.copy()
     for _ in range(MAX_RESHOOT):
-        traj, force, ends = _march(ops, f, c_m, mesh, s)
+        traj, force, ends = _march(ops, f, c_m, mesh, s, keep)
         s[:, P] = s[:, 0]
         periodicity = _defect(s, ends)
         if np.all(periodicity <= RESHOOT_TOL):
