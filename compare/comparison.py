@@ -193,7 +193,7 @@ def simulate_model(ref: Reference, model, *, extra_effects_list=((),), seed: int
              [model.case(m.pair, extra_effects=tuple(extra), **op) for extra in extra_effects_list])
     wanted = (model.sensor,) if channels is None else tuple(channels)
     # only the channels read are made and decimated: in a time-stepped batch of a helical pair that was 13 channels
-    # for one (a fit of a speed fluctuation on the far rig of experiments/bench_compare.py: 18.6 -> 14 s)
+    # for one (a fit of a speed fluctuation on the far rig of experiments/bench_compare.py: 18.6 -> 12.5 s)
     signals = simulate(cases, channels=wanted, channels_field="model.sensor" if channels is None else "secondary channel")
     if channels is None:
         return [s.channels[model.sensor] for s in signals]

@@ -67,9 +67,10 @@ The candidate's baseline stays the calibrated one, so its reduction grows by
 what the joint refit gives; the record of what was done is the candidate's
 ``joint_refit`` entry (the JSON document's schema, :mod:`compare.schema`).
 
-Cost: about 300 periodic simulations and one search of one effect; on the
-helical rig 40-60 s on 2 cores, paid only by a calibrated pass that claims a
-periodic effect.
+Cost: about 400 periodic simulations and one search of one effect, paid only by
+a calibrated pass that claims a periodic effect; on the helical rig of the
+benchmark (``experiments/bench_compare.py``, 2 cores) 40-60 s when it was
+written, 12-17 s since stop 41 (the Sobol stage is two thirds of it).
 
 References
 ----------
