@@ -54,7 +54,9 @@ class MeshRecord:
         P, ppc = self.period_cycles, self.positions_per_cycle
         k = self.k.reshape(P, ppc) / np.abs(self.k).max()
         e = self.error_force.reshape(P, ppc) / max(np.abs(self.error_force).max(), 1e-300)
-        return int(np.unique(np.round(np.hstack([k, e]), 10), axis=0).shape[0])
+        rows = np.round(np.hstack([k, e]), 10) + 0.0        # + 0.0: -0.0 becomes 0.0, as np.unique compares them
+        # a set of the rows' bytes: np.unique(axis=0) sorts them as structured records, 40 ms a record of 29 cycles
+        return len({r.tobytes() for r in rows})
 
     def at(self, x_cycles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Stiffness and error force at mesh positions (periodic linear interpolation)."""
