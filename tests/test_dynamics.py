@@ -482,3 +482,33 @@ def test_chunked_decimation_equals_scipy_upfirdn_on_the_whole_stream(R, monkeypa
     want = full[2 * decimation.HALF_TAPS_OUT: 2 * decimation.HALF_TAPS_OUT + got.shape[0]]
     assert got.shape[0] == (x.shape[0] - 1 - 2 * d.delay) // R + 1 and got.shape[1:] == (2, 5)
     assert np.max(np.abs(got - want)) < 1e-12 * np.max(np.abs(want))
+
+
+def test_distinct_cycles_counts_the_different_cycles_of_a_record():
+    """MeshRecord.distinct_cycles against np.unique over the normalised rows (the definition; rounding to 1e-10,
+    -0.0 equal to 0.0): random records with repeated cycles, signed zeros and an all-zero error force."""
+    from types import SimpleNamespace
+
+    from datagen.mesh_excitation import MeshRecord
+
+    rng = np.random.default_rng(0)
+    for trial in range(100):
+        P, ppc = int(rng.integers(1, 30)), 8
+        base = rng.standard_normal((int(rng.integers(1, P + 1)), 2 * ppc))
+        rows = base[rng.integers(0, base.shape[0], P)]
+        if trial % 3 == 0:
+            rows[np.abs(rows) < 0.5] = 0.0
+            rows[::2] *= -1.0
+        if trial % 5 == 0:
+            rows[:, ppc:] = 0.0
+        k, e = rows[:, :ppc], rows[:, ppc:]
+        rec = SimpleNamespace(period_cycles=P, positions_per_cycle=ppc, k=k.ravel(), error_force=e.ravel())
+        norm = np.hstack([k / np.abs(k).max(), e / max(np.abs(e).max(), 1e-300)])
+        expected = np.unique(np.round(norm, 10), axis=0).shape[0]
+        assert MeshRecord.distinct_cycles(rec) == expected
+    # two cycles equal but for the sign of a zero: one cycle, as np.unique counts it
+    k = np.ones((2, 8))
+    e = np.zeros((2, 8))
+    e[1] = -0.0
+    rec = SimpleNamespace(period_cycles=2, positions_per_cycle=8, k=k.ravel(), error_force=e.ravel())
+    assert MeshRecord.distinct_cycles(rec) == 1
