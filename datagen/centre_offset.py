@@ -142,13 +142,18 @@ def slots_at_centre_offset(stiffness, dx_m, dy_m, *, subdivisions: int = 1) -> n
     # slice stiffness in contact at the grid samples (each at its own displacement): (n_grid, S + 1, slices)
     dg_grid = dg[::q]
     u = (np.arange(dg_grid.size) % ppc) / ppc
-    v = dw / pair_compliance(pair)(slot_positions(pair, u, slots, shift) + dg_grid[:, None, None])
+    # slices at one shift (a spur pair's pixel columns) have the same positions: their compliance is read once
+    # (the same values, so the same quotients to the bit); 200 columns of a pitted flank made this a fifth of
+    # the record's time
+    one = shift.size > 1 and bool(np.all(shift == shift[0]))
+    v = dw / pair_compliance(pair)(slot_positions(pair, u, slots, shift[:1] if one else shift) + dg_grid[:, None, None])
+    if one and v.shape[2] == 1:
+        v = np.repeat(v, shift.size, axis=2)
     if stiffness._overrides:    # pitted pairs: scaled by the nominal pitted / healthy ratio at that sample
-        k_nom = np.tile(stiffness._k_cycle, (n_cycles, 1, 1))
         cyc = np.arange(dg_grid.size) // ppc
         for (m, s), kk in stiffness._overrides.items():
             rows = np.nonzero((cyc - s) % stiffness.period_cycles == m)[0]
-            kn = k_nom[rows, s]
+            kn = stiffness._k_cycle[rows % ppc, s]          # the nominal record repeats every cycle
             v[rows, s + 1] *= np.divide(kk[rows % ppc], kn, out=np.ones_like(kn), where=kn > 0)
     v = np.concatenate([v, v[:, -1:]], axis=1)     # the slot after the last: out of contact, any finite value
     edges = (shift / h, (pair.contact_end_m - pair.contact_start_m + shift) / h)   # in grid steps from A
