@@ -95,6 +95,25 @@ def test_cli_writes_csv_npz_json_png_and_refuses_bad_input(tmp_path, capsys):
     assert not out2.exists()
 
 
+def test_cli_channels_writes_only_those_and_equal_to_the_full_run(tmp_path, capsys):
+    """`--channels`: only the named channels are written, each equal to the bit to the full simulation's
+    (datagen.simulate.simulate ``channels``); an unknown name exits 2 naming it, before anything is written."""
+    p = tmp_path / "case.toml"
+    p.write_text(CASE_TOML)
+    assert main(["simulate", str(p), "--out", str(tmp_path / "all")]) == 0
+    assert main(["simulate", str(p), "--out", str(tmp_path / "two"), "--channels", "acc_pinion_loa_m_s2,tacho_pinion",
+                 "--png"]) == 0
+    full, two = Signals.load_npz(tmp_path / "all" / "case.npz"), Signals.load_npz(tmp_path / "two" / "case.npz")
+    assert sorted(two.channels) == ["acc_pinion_loa_m_s2", "tacho_pinion"]
+    for name in two.channels:
+        assert np.array_equal(two.channels[name], full.channels[name]), name
+    capsys.readouterr()
+    assert main(["simulate", str(p), "--out", str(tmp_path / "bad"), "--channels", "acc_pinion_loa_m_s2,acc_nowhere"]) == 2
+    err = capsys.readouterr().err
+    assert "--channels" in err and "acc_nowhere" in err
+    assert not (tmp_path / "bad").exists()
+
+
 def test_helical_axial_force_is_mesh_force_times_tan_base_helix():
     """Helical pair: mean axial bearing force = mean mesh force * tan(beta_b) (Kahraman 1994), 1e-6."""
     pair = helical_pair_example()
