@@ -166,10 +166,15 @@ class Batch:
     def forcing(self, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """State change (..., C, 3n+1) and ``d_lin`` share (..., C) of a time-varying forcing ``f`` (..., C, n)."""
         if f.ndim == 3:     # (L, C, n): C batched products (L x n)(n x m), 5x faster than the einsum (measured)
-            G = np.matmul(f.transpose(1, 0, 2), self.force_state).transpose(1, 0, 2)
+            Gc = np.matmul(f.transpose(1, 0, 2), self.force_state)              # (C, L, m)
+            # written once into the (L, C, m + 1) layout the march reads, the constant component 0 (one copy, not
+            # a transpose, a concatenation and the march's own contiguous copy)
+            G = np.empty((f.shape[0], f.shape[1], Gc.shape[2] + 1))
+            G[..., :-1] = Gc.transpose(1, 0, 2)
+            G[..., -1] = 0.0
         else:
             G = np.einsum("...cn,cnm->...cm", f, self.force_state)
-        G = np.concatenate([G, np.zeros(G.shape[:-1] + (1,))], axis=-1)
+            G = np.concatenate([G, np.zeros(G.shape[:-1] + (1,))], axis=-1)
         return G, np.einsum("...cn,cn->...c", f, self.u)
 
 
