@@ -49,30 +49,27 @@ def fine_names(n: int, wanted=None) -> list[str]:
     return [nm for nm in names if nm in need] or names   # none of them (unknown names): all, so the error lists them
 
 
+#: the state components each solver channel is made of (:func:`channel_values`): (part, DOF), part "q", "qd" or
+#: "qdd"; "all_q" is every displacement (the mesh deflection v . q)
+_SOURCES = {"acc_pinion_loa_m_s2": (("qdd", "y_1"),), "acc_wheel_loa_m_s2": (("qdd", "y_2"),),
+            "acc_pinion_axial_m_s2": (("qdd", "z_1"),), "acc_wheel_axial_m_s2": (("qdd", "z_2"),),
+            "force_bearing_pinion_loa_n": (("q", "y_1"), ("qd", "y_1")),
+            "force_bearing_wheel_loa_n": (("q", "y_2"), ("qd", "y_2")),
+            "force_bearing_pinion_axial_n": (("q", "z_1"), ("qd", "z_1")),
+            "force_bearing_wheel_axial_n": (("q", "z_2"), ("qd", "z_2")),
+            "dte_m": (("q", "phi_1"), ("q", "phi_2")), "mesh_deflection_m": (("all_q", None),), "mesh_force_n": (),
+            "speed_pinion_rpm": (("qd", "phi_1"),), "speed_wheel_rpm": (("qd", "phi_2"),),
+            "_phi_1": (("q", "phi_1"),), "_phi_2": (("q", "phi_2"),)}
+
+
 def state_rows(n: int, ix: dict, names: list[str]) -> list[int]:
     """The components of the Newmark state ``(q, q', q'')`` (3n) that :func:`channel_values` reads to make
     ``names`` (sorted)."""
-    q, qd, qdd = (lambda d: ix[d]), (lambda d: n + ix[d]), (lambda d: 2 * n + ix[d])
-    dof = {"pinion_loa": "y_1", "wheel_loa": "y_2", "pinion_axial": "z_1", "wheel_axial": "z_2"}
+    offset = {"q": 0, "qd": n, "qdd": 2 * n}
     need = set()
     for nm in names:
-        if nm.startswith("acc_"):
-            need.add(qdd(dof[nm[4:].rsplit("_m_s2", 1)[0]]))
-        elif nm.startswith("force_bearing_"):
-            d = dof[nm[len("force_bearing_"):].rsplit("_n", 1)[0]]
-            need |= {q(d), qd(d)}
-        elif nm == "dte_m":
-            need |= {q("phi_1"), q("phi_2")}
-        elif nm == "mesh_deflection_m":
-            need |= set(range(n))
-        elif nm == "speed_pinion_rpm":
-            need.add(qd("phi_1"))
-        elif nm == "speed_wheel_rpm":
-            need.add(qd("phi_2"))
-        elif nm == "_phi_1":
-            need.add(q("phi_1"))
-        elif nm == "_phi_2":
-            need.add(q("phi_2"))
+        for part, dof in _SOURCES[nm]:
+            need |= set(range(n)) if part == "all_q" else {offset[part] + ix[dof]}
     return sorted(need)
 
 

@@ -67,10 +67,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _channels(case) -> list[str]:
-    base = ["acc_pinion_loa_m_s2", "acc_wheel_loa_m_s2", "force_bearing_pinion_loa_n", "force_bearing_wheel_loa_n",
-            "dte_m", "mesh_deflection_m", "mesh_force_n", "speed_pinion_rpm", "speed_wheel_rpm", "tacho_pinion",
-            "tacho_wheel"]
-    if case.pair.is_helical:
-        base += ["acc_pinion_axial_m_s2", "acc_wheel_axial_m_s2", "force_bearing_pinion_axial_n",
-                 "force_bearing_wheel_axial_n"]
-    return base
+    from datagen.output_channels import channel_names
+
+    names = channel_names(8 if case.pair.is_helical else 6)
+    return [c for c in names if not c.startswith("_")] + ["tacho_pinion", "tacho_wheel"]
