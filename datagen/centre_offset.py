@@ -147,15 +147,17 @@ def slots_at_centre_offset(stiffness, dx_m, dy_m, *, subdivisions: int = 1) -> n
     # the record's time
     one = shift.size > 1 and bool(np.all(shift == shift[0]))
     v = dw / pair_compliance(pair)(slot_positions(pair, u, slots, shift[:1] if one else shift) + dg_grid[:, None, None])
-    if one and v.shape[2] == 1:
-        v = np.repeat(v, shift.size, axis=2)
-    if stiffness._overrides:    # pitted pairs: scaled by the nominal pitted / healthy ratio at that sample
+    # the slot after the last: out of contact, any finite value (a copy of the last slot, pits included)
+    v = np.concatenate([v, v[:, -1:]], axis=1)
+    # pitted pairs: scaled by the nominal pitted / healthy ratio at that sample: (rows, column, ratio per slice)
+    scaled = []
+    if stiffness._overrides:
         cyc = np.arange(dg_grid.size) // ppc
         for (m, s), kk in stiffness._overrides.items():
             rows = np.nonzero((cyc - s) % stiffness.period_cycles == m)[0]
             kn = stiffness._k_cycle[rows % ppc, s]          # the nominal record repeats every cycle
-            v[rows, s + 1] *= np.divide(kk[rows % ppc], kn, out=np.ones_like(kn), where=kn > 0)
-    v = np.concatenate([v, v[:, -1:]], axis=1)     # the slot after the last: out of contact, any finite value
+            ratio = np.divide(kk[rows % ppc], kn, out=np.ones_like(kn), where=kn > 0)
+            scaled += [(rows, c, ratio) for c in ((s + 1, S + 1) if s + 1 == S else (s + 1,))]
     edges = (shift / h, (pair.contact_end_m - pair.contact_start_m + shift) / h)   # in grid steps from A
     if stiffness.edges == "point":      # as datagen.stiffness.contact_fraction: at the cell boundaries
         edges = (np.ceil(edges[0] - 1e-9) - 0.5, np.floor(edges[1] + 1e-9) + 0.5)
@@ -165,8 +167,13 @@ def slots_at_centre_offset(stiffness, dx_m, dy_m, *, subdivisions: int = 1) -> n
     if MERGE_UNSTAGGERED and shift.size > 1 and np.all(e0 == e0[0]) and np.all(e1 == e1[0]):
         # unstaggered slices (a spur pair's pixel columns): every weight of the rule is the same on each slice
         # and the rule is linear in the slice values, so their sum goes through it once (to rounding)
-        v = v.sum(axis=2, keepdims=True)
+        v = _slice_sums(v, shift.size if one else None, scaled)
         edges, shift = (e0[:1], e1[:1]), shift[:1]
+    else:
+        if one and v.shape[2] == 1:
+            v = np.repeat(v, shift.size, axis=2)
+        for rows, c, ratio in scaled:
+            v[rows, c] *= ratio
     out = np.empty((dx.size, S + 1))
     if q > 1 and banded_pays(edges[0], shift.size):
         _points_banded(out, v, edges, d_start, d_end, ppc, q)
@@ -176,6 +183,36 @@ def slots_at_centre_offset(stiffness, dx_m, dy_m, *, subdivisions: int = 1) -> n
             i = np.arange(r0, min(r0 + block, dx.size))
             out[i] = _points(v, edges, d_start[i], d_end[i], i, ppc, q)
     return np.concatenate([out[:, 1:], out[:, :1]], axis=1)
+
+
+#: elements (rows x columns x slices) per block of :func:`_slice_sums` (a block stays in the cache)
+_SUM_BLOCK_ELEMENTS = 1 << 17
+
+
+def _slice_sums(v, n_slices, scaled):
+    """Sum over the slices of ``v`` (rows, columns, slices) after the pitted rows are scaled (``scaled``: rows,
+    column, ratio per slice); ``n_slices``: ``v`` holds one slice that stands for that many equal ones
+    (a spur pair's pixel columns), else None.
+
+    The same sums as scaling ``np.repeat(v, n_slices, axis=2)`` and summing it along the slices, bit for bit,
+    block by block of rows instead of on one array of them all (a pitted spur flank's 200 columns made that
+    copies more than half of a hook-2c record's time)."""
+    if n_slices is None:
+        for rows, c, ratio in scaled:
+            v[rows, c] *= ratio
+        return v.sum(axis=2, keepdims=True)
+    n_rows, n_cols = v.shape[:2]
+    out = np.empty((n_rows, n_cols, 1))
+    block = max(1, _SUM_BLOCK_ELEMENTS // (n_cols * n_slices))
+    for r0 in range(0, n_rows, block):
+        r1 = min(r0 + block, n_rows)
+        b = np.repeat(v[r0:r1], n_slices, axis=2)
+        for rows, c, ratio in scaled:
+            lo, hi = np.searchsorted(rows, (r0, r1))
+            if hi > lo:
+                b[rows[lo:hi] - r0, c] *= ratio[lo:hi]
+        out[r0:r1] = b.sum(axis=2, keepdims=True)
+    return out
 
 
 #: slices from which :func:`slots_at_centre_offset` may sum a point's slices by contact bands

@@ -112,7 +112,13 @@ def pit_overrides(pair, pc: PairCompliance, maps, P: int, g_cycle, dw: float, w_
         beam = pc.beams[pm.gear]
         offset = (pair._gear(pm.gear).face_width_m - b_c) / 2.0
         cols = np.clip(((w_slices + offset) / pm.grid.dw_m).astype(np.int64), 0, pm.grid.n_face - 1)
-        geo = {t: _section_loss(pair, beam, pm.gear, pm.depth_m[t], pm.grid) for t in pm.pitted_teeth}
+        geo = {}
+        for t in pm.pitted_teeth:
+            pg = _section_loss(pair, beam, pm.gear, pm.depth_m[t], pm.grid)
+            # the slices whose face column holds a pit somewhere: on the others the section increments are exact
+            # zeros, so the bending, shear and axial terms add +0.0 and the compliance is the healthy one
+            touched = ((pg.dW != 0.0).any(axis=(0, 1)) | (pg.dA0 != 0.0).any(axis=0))[cols]
+            geo[t] = (pg, np.nonzero(touched)[0])
         per_gear[pm.gear] = (pm, beam, cols, geo)
     z = {"pinion": pair.pinion.teeth, "wheel": pair.wheel.teeth}
     engaged = sorted({m for gear, (pm, *_rest) in per_gear.items() for m in range(P) if m % z[gear] in pm.pitted_teeth})
@@ -131,17 +137,19 @@ def pit_overrides(pair, pc: PairCompliance, maps, P: int, g_cycle, dw: float, w_
                 tooth = m % z[gear]
                 if tooth not in geo:
                     continue
-                pg = geo[tooth]
+                pg, sel = geo[tooth]
+                if sel.size == 0:
+                    continue
                 t_sap, _ = pair.active_roll_range_rad(gear)
-                roll = pair.roll_angle_rad(gear, g0)
+                roll = pair.roll_angle_rad(gear, g0[:, sel])
                 s_arc = beam.base_radius_m * (roll**2 - t_sap**2) / 2.0
                 rows = np.clip((s_arc / pm.grid.ds_m).astype(np.int64), 0, pm.grid.n_profile - 1)
-                colg = np.broadcast_to(cols[None, :], rows.shape)
-                pitted_here |= pg.depth[rows, colg] > 0
+                colg = np.broadcast_to(cols[sel][None, :], rows.shape)
+                pitted_here[:, sel] |= pg.depth[rows, colg] > 0
                 a1, Y, h = beam.load_point(roll)
                 W = pg.dW[:, rows, colg]
                 b, sh, ax = beam_compliance(a1, Y, h, W, pg.dA0[rows, colg], E, G)
-                comp = comp + b + sh + ax
+                comp[:, sel] = comp[:, sel] + b + sh + ax
             if pit_model == "no_contact":
                 k = np.where(contact & ~pitted_here, dw / comp, 0.0)
             else:

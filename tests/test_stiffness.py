@@ -302,3 +302,53 @@ def test_map_cycle_blocks_identity_scale_and_coupling():
     assert not np.allclose(mapped.k_n_per_m[3 * ppc:4 * ppc], mapped.k_n_per_m[:ppc])
     with pytest.raises(ValueError, match="shape"):
         ms.map_cycle_blocks(lambda b: b[:, :1])
+
+
+@pytest.mark.parametrize("pair_fn", [spur_pair_example, helical_pair_example])
+@pytest.mark.parametrize("pit_model", ["no_contact", "weak_spring"])
+def test_pitted_slices_equal_the_section_loss_evaluated_on_every_slice(pair_fn, pit_model):
+    """``pit_overrides`` evaluates the section loss only on slices whose face column holds a pit (elsewhere the
+    increments are exact zeros). Reference: the same formulas (Ma et al. 2015 section loss, PHYSICS.md section
+    2) evaluated here on every slice of every pitted engagement; equal to 1e-12 relative. The pits leave most
+    face columns unpitted, so a wrong column selection changes the slices it drops or keeps."""
+    from datagen.compliance import beam_compliance, pair_compliance
+    from datagen.pit_stiffness import _section_loss
+
+    pair = pair_fn()
+    grid = pair.flank_grid("pinion", 60, 80)
+    d = np.zeros(grid.shape)
+    d[5:20, 50:58] = 0.3e-3          # low on the flank: the section loss reaches every contact above it
+    d[30:45, 10:16] = 0.2e-3
+    pits = PitMap(grid=grid, depth_m={3: d}, gear="pinion")
+    ms = mesh_stiffness(pair, pits=pits, positions_per_cycle=40, n_slices=80, pit_model=pit_model)
+    pc = pair_compliance(pair)
+    beam = pc.beams["pinion"]
+    pg = _section_loss(pair, beam, "pinion", d, grid)
+    E, G = pair.material.youngs_modulus_pa, pair.material.shear_modulus_pa
+    from datagen.stiffness import contact_fraction, face_slices
+    dw, w, shift = face_slices(pair, 80)
+    frac = contact_fraction(pair, 40, ms.k_slots_n_per_m.shape[1], shift, ms.edges)
+    cols = np.clip(((w + (pair.pinion.face_width_m - pair.contact_face_width_m) / 2) / grid.dw_m).astype(int), 0, 79)
+    t_sap, _ = pair.active_roll_range_rad("pinion")
+    checked = 0
+    for (m, s), k_over in ms._overrides.items():
+        g = ms._g_cycle[:, s, :]
+        contact = ~np.isnan(g)
+        g0 = np.where(contact, g, pair.contact_start_m)
+        roll = pair.roll_angle_rad("pinion", g0)
+        rows = np.clip((beam.base_radius_m * (roll**2 - t_sap**2) / 2 / grid.ds_m).astype(int), 0, 59)
+        colg = np.broadcast_to(cols[None, :], rows.shape)
+        pitted = d[rows, colg] > 0
+        b, sh, ax = beam_compliance(*beam.load_point(roll), pg.dW[:, rows, colg], pg.dA0[rows, colg], E, G)
+        comp = pc(g0) + b + sh + ax
+        if pit_model == "no_contact":
+            k = np.where(contact & ~pitted, dw / comp, 0.0)
+        else:
+            k = np.where(contact, dw / np.where(pitted, comp - pc.c_hertz, comp), 0.0)
+        np.testing.assert_allclose(k_over, frac[:, s] * k, rtol=1e-12, atol=0.0)
+        checked += 1
+        # the slices of unpitted columns are the healthy ones, and some pitted-column slices are not
+        healthy = frac[:, s] * np.where(contact, dw / pc(g0), 0.0)
+        unpitted_cols = ~np.isin(cols, np.nonzero(d.any(axis=0))[0])
+        np.testing.assert_array_equal(k_over[:, unpitted_cols], healthy[:, unpitted_cols])
+    assert checked >= 2
