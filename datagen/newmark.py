@@ -126,9 +126,9 @@ class Batch:
         m = 3 * n
         C = len(ops)
         f = np.asarray(f, dtype=float).reshape(C, n)
-        same_ops = all(o is ops[0] or (np.array_equal(o.B, ops[0].B) and np.array_equal(o.force_state,
-                                                                                      ops[0].force_state))
-                       for o in ops)
+        # each distinct operator object compared once (a periodic march repeats a case's object per mesh cycle)
+        same_ops = all(np.array_equal(o.B, ops[0].B) and np.array_equal(o.force_state, ops[0].force_state)
+                       for o in {id(o): o for o in ops[1:] if o is not ops[0]}.values())
         ref = f[int(np.argmax(np.abs(f).max(axis=1)))]
         norm = float(ref @ ref)
         factor = f @ ref / norm if norm > 0 else np.zeros(C)
