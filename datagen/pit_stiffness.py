@@ -132,6 +132,9 @@ def pit_overrides(pair, pc: PairCompliance, maps, P: int, g_cycle, dw: float, w_
                 continue
             g0 = np.where(contact, g, pair.contact_start_m)
             comp = pc(g0)
+            # unstaggered slices (a spur pair's pixel columns) share their contact positions: the load point of
+            # every pitted slice is that of the first, computed once (elementwise, so the same values)
+            g_pit = g0[:, :1] if bool(np.all(g0 == g0[:, :1])) else None
             pitted_here = np.zeros(g.shape, bool)
             for gear, (pm, beam, cols, geo) in per_gear.items():
                 tooth = m % z[gear]
@@ -141,10 +144,10 @@ def pit_overrides(pair, pc: PairCompliance, maps, P: int, g_cycle, dw: float, w_
                 if sel.size == 0:
                     continue
                 t_sap, _ = pair.active_roll_range_rad(gear)
-                roll = pair.roll_angle_rad(gear, g0[:, sel])
+                roll = pair.roll_angle_rad(gear, g0[:, sel] if g_pit is None else g_pit)
                 s_arc = beam.base_radius_m * (roll**2 - t_sap**2) / 2.0
                 rows = np.clip((s_arc / pm.grid.ds_m).astype(np.int64), 0, pm.grid.n_profile - 1)
-                colg = np.broadcast_to(cols[sel][None, :], rows.shape)
+                rows, colg = np.broadcast_arrays(rows, cols[sel][None, :])
                 pitted_here[:, sel] |= pg.depth[rows, colg] > 0
                 a1, Y, h = beam.load_point(roll)
                 W = pg.dW[:, rows, colg]
