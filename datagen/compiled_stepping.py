@@ -222,3 +222,29 @@ def run_general(batch, S0: np.ndarray, n_steps: int, chunk: int, inputs, theta_o
             bad = _march_law(mesh.law, *args, rec.k_slots, rec.e_slots, mesh.c_m, batch.sigma, mesh.law_row,
                              mesh.law_params, mesh.tol, mesh.max_iter, traj, force)
         yield i0, traj, force, int(bad)
+
+
+@njit(cache=True)
+def linear_update(Y, m, alpha, beta, gE, has_error, us, F, store, rows, forces, r, sel):
+    """One step of :func:`datagen.newmark.run_linear` after its product ``Y = s @ B~`` (C, J, m + 3), in place:
+    the mesh force ``F = alpha Y[.., m + 1] + beta Y[.., m + 2] (+ gE)`` (C, J) and the state ``Y[.., :m + 1] -=
+    F us``; with ``store``, column 0's components ``sel`` into ``rows[r]`` and its force into ``forces[r]``.
+
+    The same IEEE operations in the same order as the numpy lines it replaces (a product and a difference, never
+    fused), so the same bits (``tests/test_dynamics.py``); one call instead of the ~6 array operations whose
+    short inner loops (m + 1 values per case and column) made the periodic march's cost."""
+    C, J = Y.shape[0], Y.shape[1]
+    for c in range(C):
+        a = alpha[c]
+        b = beta[c]
+        for j in range(J):
+            f = a * Y[c, j, m + 1] + b * Y[c, j, m + 2]
+            if has_error:
+                f += gE[c, j]
+            F[c, j] = f
+            for k in range(m + 1):
+                Y[c, j, k] -= f * us[c, k]
+        if store:
+            for kk in range(sel.size):
+                rows[r, c, kk] = Y[c, 0, sel[kk]]
+            forces[r, c] = F[c, 0]

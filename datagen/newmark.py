@@ -109,6 +109,11 @@ def consistent_states(ops: list[NewmarkOperators], x: np.ndarray, f: np.ndarray,
     return S
 
 
+#: :func:`run_linear`'s per-step update compiled (:func:`datagen.compiled_stepping.linear_update`, the same
+#: bits); False: the numpy lines, the reference of the tests
+COMPILED_UPDATE = True
+
+
 class Batch:
     """The operators of C cases stacked for the time loop, with a constant forcing per case.
 
@@ -228,11 +233,10 @@ def run_linear(batch: Batch, S0: np.ndarray, k: np.ndarray, c: np.ndarray, E: np
     kappa = k + (2.0 / batch.dt) * c                           # (N, C)
     inv = 1.0 / (1.0 + batch.sigma * kappa)
     # F = alpha d_lin + beta h + gamma E   (closed form of the linear law, module docstring)
-    alpha = (kappa * inv)[..., None]                            # (N, C, 1)
+    alpha = kappa * inv                                         # (N, C)
     gamma = kappa * batch.sigma * inv - 1.0
-    beta = (gamma * c)[..., None]
+    beta = gamma * c
     gE = (gamma * E)[..., None] * force_scale[None, None, :] if E is not None else None   # (N, C, J)
-    us = batch.u_state[:, None, :]
     S = batch.augment(S0, force_scale)
     R = C // (groups or 1)
     # stored time-major (each step one contiguous block) and turned time-last once at the end: writing every step
@@ -241,17 +245,32 @@ def run_linear(batch: Batch, S0: np.ndarray, k: np.ndarray, c: np.ndarray, E: np
     k_st = sel.size
     rows = np.empty((N, C, k_st)) if store else None
     forces = np.empty((N, C)) if store else None
-    for i in range(N):
-        Y = batch.product(S)
-        F = alpha[i] * Y[..., m + 1] + beta[i] * Y[..., m + 2]
-        if gE is not None:
-            F += gE[i]
-        S = Y[..., :m + 1]
-        S -= F[..., None] * us
-        if store:
-            r = (i + store_shift) % N
-            rows[r] = S[:, 0, :m] if store_rows is None else S[:, 0, sel]
-            forces[r] = F[:, 0]
+    if COMPILED_UPDATE:
+        from datagen.compiled_stepping import linear_update
+
+        us = np.ascontiguousarray(batch.u_state)
+        F = np.empty((C, J))
+        no_error = np.zeros((1, 1))
+        rows_c = rows if store else np.empty((1, 1, 1))
+        forces_c = forces if store else np.empty((1, 1))
+        for i in range(N):
+            Y = batch.product(S)
+            linear_update(Y, m, alpha[i], beta[i], no_error if gE is None else gE[i], gE is not None, us, F, store,
+                          rows_c, forces_c, (i + store_shift) % N, sel)
+            S = Y[..., :m + 1]
+    else:   # the numpy reference of the same operations (tests)
+        us = batch.u_state[:, None, :]
+        for i in range(N):
+            Y = batch.product(S)
+            F = alpha[i][:, None] * Y[..., m + 1] + beta[i][:, None] * Y[..., m + 2]
+            if gE is not None:
+                F += gE[i]
+            S = Y[..., :m + 1]
+            S -= F[..., None] * us
+            if store:
+                r = (i + store_shift) % N
+                rows[r] = S[:, 0, :m] if store_rows is None else S[:, 0, sel]
+                forces[r] = F[:, 0]
     if not store:
         return S[..., :m], None, None
     if groups is None:
