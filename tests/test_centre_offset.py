@@ -334,3 +334,34 @@ def test_unstaggered_slices_summed_before_the_rule_equal_the_slice_by_slice_sum(
     assert ms.n_slices == 200 and np.abs(merged).max() > 0
     np.testing.assert_allclose(merged, slow, rtol=0, atol=1e-12 * np.abs(slow).max())
     assert not np.array_equal(slow[:, 0], np.roll(slow[:, 0], 1))      # the record is not trivial
+
+
+@pytest.mark.parametrize("edges", ["box", "point"])
+@pytest.mark.parametrize("pitted", [False, True])
+def test_compiled_one_slice_rule_gives_the_numpy_rule_to_the_bit(monkeypatch, edges, pitted):
+    """A record of one slice (a healthy spur pair, or a pitted spur flank's pixel columns summed) takes the
+    compiled point rule (``_points_one_slice``): the same IEEE operations as the numpy rule ``_points``
+    (``COMPILED = False``), so the records must be equal to the bit, signed zeros included, for an eccentric
+    wheel over a revolution at 4 and 8 points per step."""
+    from datagen import centre_offset
+    from datagen.centre_offset import slots_at_centre_offset
+    from datagen.flank import PitMap
+
+    pair = preset("spur-gds")
+    pits = None
+    if pitted:
+        grid = pair.flank_grid("pinion", 30, 40)
+        d = np.zeros(grid.shape)
+        d[8:20, 5:25] = 0.2e-3
+        pits = PitMap(grid=grid, depth_m={2: d}, gear="pinion")
+    ms = mesh_stiffness(pair, pits=pits, positions_per_cycle=32, edges=edges)
+    for q in (4, 8):
+        n = ms.period_cycles * 32 * q
+        th = 2 * np.pi * np.arange(n) / n * 3.0
+        dx, dy = 25e-6 * np.cos(th + 0.4), 25e-6 * np.sin(th + 0.4)
+        compiled = slots_at_centre_offset(ms, dx, dy, subdivisions=q)
+        monkeypatch.setattr(centre_offset, "COMPILED", False)
+        reference = slots_at_centre_offset(ms, dx, dy, subdivisions=q)
+        monkeypatch.setattr(centre_offset, "COMPILED", True)
+        assert np.array_equal(compiled, reference) and np.array_equal(np.signbit(compiled), np.signbit(reference))
+        assert np.ptp(compiled.sum(axis=1)) > 0.1 * compiled.sum(axis=1).mean()    # a stiffness that varies
