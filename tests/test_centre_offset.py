@@ -340,7 +340,7 @@ def test_unstaggered_slices_summed_before_the_rule_equal_the_slice_by_slice_sum(
 @pytest.mark.parametrize("pitted", [False, True])
 def test_compiled_one_slice_rule_gives_the_numpy_rule_to_the_bit(monkeypatch, edges, pitted):
     """A record of one slice (a healthy spur pair, or a pitted spur flank's pixel columns summed) takes the
-    compiled point rule (``_points_one_slice``): the same IEEE operations as the numpy rule ``_points``
+    compiled point rule (``compiled_records.points_one_slice``): the same IEEE operations as the numpy rule ``_points``
     (``COMPILED = False``), so the records must be equal to the bit, signed zeros included, for an eccentric
     wheel over a revolution at 4 and 8 points per step."""
     from datagen import centre_offset
