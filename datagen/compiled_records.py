@@ -64,3 +64,44 @@ def points_one_slice(v, e0, e1, d_start, d_end, i0, i1, ppc, q, snap, out):
             else:
                 value = (1.0 - t) * v_a + t * v_b
             out[i, col] = share * value
+
+
+@njit(cache=True)
+def _interp_at(x, xp, fp, slopes):
+    """``np.interp(x, xp, fp)`` at one finite ``x`` with the slopes numpy precomputes (``(fp[j + 1] - fp[j]) /
+    (xp[j + 1] - xp[j])``): the interval by bisection, then numpy's expressions and special cases."""
+    n = xp.size
+    if x < xp[0]:
+        return fp[0]
+    if x > xp[n - 1]:
+        return fp[n - 1]
+    if x == xp[n - 1]:
+        return fp[n - 1]
+    lo, hi = 0, n - 1                   # xp[lo] <= x < xp[hi]
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if xp[mid] <= x:
+            lo = mid
+        else:
+            hi = mid
+    if xp[lo] == x:
+        return fp[lo]
+    y = slopes[lo] * (x - xp[lo]) + fp[lo]
+    if np.isnan(y):
+        y = slopes[lo] * (x - xp[lo + 1]) + fp[lo + 1]
+        if np.isnan(y) and fp[lo] == fp[lo + 1]:
+            y = fp[lo]
+    return y
+
+
+@njit(cache=True)
+def slice_stiffness(u, slots, shift, dg, start_m, base_pitch_m, dw, xp, fp, slopes, out):
+    """``out[r, s, k] = dw / np.interp(A + (u[r] + slots[s]) p_bt - shift[k] + dg[r], xp, fp)``: the slice
+    stiffnesses of the displaced pair at the grid samples (:func:`datagen.centre_offset.slots_at_centre_offset`,
+    :func:`datagen.stiffness.slot_positions` and the pair compliance table), the same operations in the same
+    order, without the (samples, slots, slices) temporaries (a helical pair's 100 slices)."""
+    for r in range(u.size):
+        for s in range(slots.size):
+            base = start_m + (u[r] + slots[s]) * base_pitch_m
+            for k in range(shift.size):
+                out[r, s, k] = dw / _interp_at((base - shift[k]) + dg[r], xp, fp, slopes)
