@@ -149,17 +149,7 @@ def slots_at_centre_offset(stiffness, dx_m, dy_m, *, subdivisions: int = 1) -> n
     # (the same values, so the same quotients to the bit); 200 columns of a pitted flank made this a fifth of
     # the record's time
     one = shift.size > 1 and bool(np.all(shift == shift[0]))
-    pc = pair_compliance(pair)
-    sh = shift[:1] if one else shift
-    if COMPILED and np.all(np.isfinite(dg_grid)):
-        from datagen.compiled_records import slice_stiffness
-
-        xp, fp = pc.g_table_m, pc.c_table
-        v = np.empty((u.size, slots.size, sh.size))
-        slice_stiffness(u, slots, np.ascontiguousarray(sh, dtype=float), np.ascontiguousarray(dg_grid), pair.contact_start_m,
-                        pair.base_pitch_m, float(dw), xp, fp, np.diff(fp) / np.diff(xp), v)
-    else:
-        v = dw / pc(slot_positions(pair, u, slots, sh) + dg_grid[:, None, None])
+    v = dw / pair_compliance(pair)(slot_positions(pair, u, slots, shift[:1] if one else shift) + dg_grid[:, None, None])
     # the slot after the last: out of contact, any finite value (a copy of the last slot, pits included)
     v = np.concatenate([v, v[:, -1:]], axis=1)
     # pitted pairs: scaled by the nominal pitted / healthy ratio at that sample: (rows, column, ratio per slice)

@@ -338,18 +338,16 @@ def test_unstaggered_slices_summed_before_the_rule_equal_the_slice_by_slice_sum(
 
 @pytest.mark.parametrize("edges", ["box", "point"])
 @pytest.mark.parametrize("pitted", [False, True])
-@pytest.mark.parametrize("name", ["spur-gds", "helical-dct"])
-def test_compiled_record_rules_give_the_numpy_rules_to_the_bit(monkeypatch, edges, pitted, name):
-    """The compiled kernels of the centre-offset record (``datagen.compiled_records``: the slice stiffnesses at
-    the displaced grid samples, and the point rule of a one-slice record - a healthy spur pair, or a pitted spur
-    flank's pixel columns summed) do the numpy code's IEEE operations in the same order (``COMPILED = False``
-    runs that code), so the records must be equal to the bit, signed zeros included, for an eccentric wheel
-    over a revolution at 4 and 8 points per step."""
+def test_compiled_one_slice_rule_gives_the_numpy_rule_to_the_bit(monkeypatch, edges, pitted):
+    """A record of one slice (a healthy spur pair, or a pitted spur flank's pixel columns summed) takes the
+    compiled point rule (``compiled_records.points_one_slice``): the same IEEE operations as the numpy rule ``_points``
+    (``COMPILED = False``), so the records must be equal to the bit, signed zeros included, for an eccentric
+    wheel over a revolution at 4 and 8 points per step."""
     from datagen import centre_offset
     from datagen.centre_offset import slots_at_centre_offset
     from datagen.flank import PitMap
 
-    pair = preset(name)
+    pair = preset("spur-gds")
     pits = None
     if pitted:
         grid = pair.flank_grid("pinion", 30, 40)
@@ -367,25 +365,3 @@ def test_compiled_record_rules_give_the_numpy_rules_to_the_bit(monkeypatch, edge
         monkeypatch.setattr(centre_offset, "COMPILED", True)
         assert np.array_equal(compiled, reference) and np.array_equal(np.signbit(compiled), np.signbit(reference))
         assert np.ptp(compiled.sum(axis=1)) > 0.1 * compiled.sum(axis=1).mean()    # a stiffness that varies
-
-
-def test_compiled_interpolation_is_numpys_on_knots_edges_and_between():
-    """``compiled_records._interp_at`` against ``np.interp`` (the reference it replicates): below and above the
-    range, on every knot, at both ends, and at random points between, equal to the bit - on the pair compliance
-    table, and on a rough non-uniform table (values of both signs, repeated values) whose slope terms are not
-    lost in the rounding of the table values, where another association or another interval fails it."""
-    from datagen.compiled_records import _interp_at
-    from datagen.compliance import pair_compliance
-
-    pc = pair_compliance(preset("helical-dct"))
-    rng = np.random.default_rng(4)
-    rough_x = np.cumsum(rng.uniform(0.1, 2.0, 300))
-    rough_y = rng.normal(size=300)
-    rough_y[100:103] = 0.7
-    for xp, fp in ((pc.g_table_m, pc.c_table), (rough_x, rough_y)):
-        slopes = np.diff(fp) / np.diff(xp)
-        span = xp[-1] - xp[0]
-        x = np.concatenate([xp, [xp[0] - span, xp[-1] + span, np.nextafter(xp[0], -np.inf),
-                                 np.nextafter(xp[-1], np.inf)], rng.uniform(xp[0] - 0.01 * span, xp[-1] + 0.01 * span, 5000)])
-        got = np.array([_interp_at(v, xp, fp, slopes) for v in x])
-        assert np.array_equal(got, np.interp(x, xp, fp))
