@@ -175,8 +175,7 @@ def slots_at_centre_offset(stiffness, dx_m, dy_m, *, subdivisions: int = 1) -> n
     else:
         if one and v.shape[2] == 1:
             v = np.repeat(v, shift.size, axis=2)
-        for rows, c, ratio in scaled:
-            v[rows, c] *= ratio
+        _scale(v, scaled)
     out = np.empty((dx.size, S + 1))
     if q > 1 and banded_pays(edges[0], shift.size):
         _points_banded(out, v, edges, d_start, d_end, ppc, q)
@@ -184,7 +183,7 @@ def slots_at_centre_offset(stiffness, dx_m, dy_m, *, subdivisions: int = 1) -> n
         from datagen.compiled_records import points_one_slice
         from datagen.stiffness import FRACTION_SNAP
 
-        points_one_slice(v, float(np.asarray(edges[0], float).ravel()[0]), float(np.asarray(edges[1], float).ravel()[0]),
+        points_one_slice(v, float(np.ravel(edges[0])[0]), float(np.ravel(edges[1])[0]),
                           np.ascontiguousarray(d_start, dtype=float), np.ascontiguousarray(d_end, dtype=float), 0,
                           dx.size, ppc, q, FRACTION_SNAP, out)
     else:
@@ -193,6 +192,15 @@ def slots_at_centre_offset(stiffness, dx_m, dy_m, *, subdivisions: int = 1) -> n
             i = np.arange(r0, min(r0 + block, dx.size))
             out[i] = _points(v, edges, d_start[i], d_end[i], i, ppc, q)
     return np.concatenate([out[:, 1:], out[:, :1]], axis=1)
+
+
+def _scale(v, scaled, r0: int = 0, r1: int | None = None) -> None:
+    """Scale the pitted samples of ``v`` in place: ``scaled`` holds (sorted rows, column, ratio per slice); with
+    ``r0``, ``r1``, ``v`` is the block of rows ``r0 .. r1 - 1``."""
+    for rows, c, ratio in scaled:
+        lo, hi = (0, rows.size) if r1 is None else np.searchsorted(rows, (r0, r1))
+        if hi > lo:
+            v[rows[lo:hi] - r0, c] *= ratio[lo:hi]
 
 
 #: elements (rows x columns x slices) per block of :func:`_slice_sums` (a block stays in the cache)
@@ -208,8 +216,7 @@ def _slice_sums(v, n_slices, scaled):
     block by block of rows instead of on one array of them all (a pitted spur flank's 200 columns made that
     copies more than half of a hook-2c record's time)."""
     if n_slices is None:
-        for rows, c, ratio in scaled:
-            v[rows, c] *= ratio
+        _scale(v, scaled)
         return v.sum(axis=2, keepdims=True)
     n_rows, n_cols = v.shape[:2]
     out = np.empty((n_rows, n_cols, 1))
@@ -217,10 +224,7 @@ def _slice_sums(v, n_slices, scaled):
     for r0 in range(0, n_rows, block):
         r1 = min(r0 + block, n_rows)
         b = np.repeat(v[r0:r1], n_slices, axis=2)
-        for rows, c, ratio in scaled:
-            lo, hi = np.searchsorted(rows, (r0, r1))
-            if hi > lo:
-                b[rows[lo:hi] - r0, c] *= ratio[lo:hi]
+        _scale(b, scaled, r0, r1)
         out[r0:r1] = b.sum(axis=2, keepdims=True)
     return out
 

@@ -1,6 +1,6 @@
 """Compiled (numba) kernels of the mesh records, each with the IEEE operations of the numpy code it replaces in
-the same order, so the same bits; the numpy code stays as the reference of the tests. Imported only where used,
-so that importing the simulator does not import numba."""
+the same order, so the same bits; the numpy code stays as the reference of the tests (``COMPILED`` of the module
+that calls them)."""
 from __future__ import annotations
 
 import numpy as np

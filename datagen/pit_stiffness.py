@@ -122,20 +122,21 @@ def pit_overrides(pair, pc: PairCompliance, maps, P: int, g_cycle, dw: float, w_
         per_gear[pm.gear] = (pm, beam, cols, geo)
     z = {"pinion": pair.pinion.teeth, "wheel": pair.wheel.teeth}
     engaged = sorted({m for gear, (pm, *_rest) in per_gear.items() for m in range(P) if m % z[gear] in pm.pitted_teeth})
-    n_slots = g_cycle.shape[1]
+    # per slot, the same for every engagement: contact, contact positions, healthy compliance; on unstaggered
+    # slices (a spur pair's pixel columns), which share their positions, the first slice's positions stand for all
+    # pitted slices (the load point is elementwise, so the same values)
+    slots = {}
+    for s in range(g_cycle.shape[1]):
+        g = g_cycle[:, s, :]
+        contact = ~np.isnan(g)
+        if contact.any():
+            g0 = np.where(contact, g, pair.contact_start_m)
+            slots[s] = (contact, g0, pc(g0), g0[:, :1] if bool(np.all(g0 == g0[:, :1])) else None)
     out = {}
     for m in engaged:
-        for s in range(n_slots):
-            g = g_cycle[:, s, :]
-            contact = ~np.isnan(g)
-            if not contact.any():
-                continue
-            g0 = np.where(contact, g, pair.contact_start_m)
-            comp = pc(g0)
-            # unstaggered slices (a spur pair's pixel columns) share their contact positions: the load point of
-            # every pitted slice is that of the first, computed once (elementwise, so the same values)
-            g_pit = g0[:, :1] if bool(np.all(g0 == g0[:, :1])) else None
-            pitted_here = np.zeros(g.shape, bool)
+        for s, (contact, g0, comp_healthy, g_pit) in slots.items():
+            comp = comp_healthy.copy()
+            pitted_here = np.zeros(contact.shape, bool)
             for gear, (pm, beam, cols, geo) in per_gear.items():
                 tooth = m % z[gear]
                 if tooth not in geo:

@@ -1,4 +1,5 @@
-"""The compiled time-stepping loop (datagen.compiled_stepping) against the numpy loop it replaces.
+"""The compiled loops of datagen.compiled_stepping against the numpy loops they replace (the periodic march's
+per-step update: bit-equal, at the end of this file).
 
 Reference: the numpy loop of ``datagen.newmark.run_general`` (checked against Radau, the periodic path and the
 drive train's harmonic response in tests/test_dynamics*.py), run on the same cases with
@@ -141,3 +142,29 @@ def test_a_law_without_a_compiled_form_runs_the_numpy_loop(monkeypatch):
     # (by ~0.07 um here; 0 if the law were ignored) under the same mean force
     assert np.mean(soft.channels["mesh_force_n"]) == pytest.approx(np.mean(plain.channels["mesh_force_n"]), rel=0.02)
     assert np.mean(soft.channels["dte_m"]) - np.mean(plain.channels["dte_m"]) > 0.02e-6
+
+
+@pytest.mark.parametrize("helical", [False, True])
+def test_compiled_linear_update_gives_the_numpy_march_to_the_bit(monkeypatch, helical):
+    """``newmark.run_linear``'s per-step update runs compiled (``compiled_stepping.linear_update``): the same IEEE
+    products and differences in the same order as the numpy lines kept as reference (``COMPILED_UPDATE =
+    False``), so every channel must be bit-equal - on the periodic path (a pitted, eccentric spur pair with a
+    pitch error; a helical pair with a profile error) and on the transient path's run_linear where used. A fused
+    multiply-add or another summation order would fail it."""
+    from datagen.pits import PitSpec
+
+    from datagen import newmark
+    from datagen.geometry import helical_pair_example
+
+    pair = helical_pair_example() if helical else SPUR
+    pits = {} if helical else dict(pits=PitSpec(shape="cluster", teeth=(1, 4), severity=(0.15, 0.08)), pit_grid=(32, 40))
+    effects = (({"name": "profile_error", "grade": 6.0},) if helical else
+               ({"name": "pitch_error", "grade": 7.0}, {"name": "eccentricity_pinion", "amplitude_m": 1.5e-5}))
+    case = Case(pair=pair, operating=OperatingPoint(1300.0, 11.3), duration_s=0.1, fs_hz=12800.0,
+                effects=effects, **pits)
+    compiled = simulate([case])[0]
+    monkeypatch.setattr(newmark, "COMPILED_UPDATE", False)
+    reference = simulate([case])[0]
+    assert compiled.metadata["solver"]["method"] == "periodic"
+    for k in reference.channels:
+        assert np.array_equal(compiled.channels[k], reference.channels[k]), k

@@ -513,25 +513,3 @@ def test_distinct_cycles_counts_the_different_cycles_of_a_record():
     rec = SimpleNamespace(period_cycles=2, positions_per_cycle=8, k=k.ravel(), error_force=e.ravel())
     assert MeshRecord.distinct_cycles(rec) == 1
 
-
-@pytest.mark.parametrize("helical", [False, True])
-def test_compiled_linear_update_gives_the_numpy_march_to_the_bit(monkeypatch, helical):
-    """``newmark.run_linear``'s per-step update runs compiled (``compiled_stepping.linear_update``): the same IEEE
-    products and differences in the same order as the numpy lines kept as reference (``COMPILED_UPDATE =
-    False``), so every channel must be bit-equal - on the periodic path (a pitted, eccentric spur pair with a
-    pitch error; a helical pair with a profile error) and on the transient path's run_linear where used. A fused
-    multiply-add or another summation order would fail it."""
-    from datagen.pits import PitSpec
-
-    pair = helical_pair_example() if helical else SPUR
-    pits = {} if helical else dict(pits=PitSpec(shape="cluster", teeth=(1, 4), severity=(0.15, 0.08)), pit_grid=(32, 40))
-    effects = (({"name": "profile_error", "grade": 6.0},) if helical else
-               ({"name": "pitch_error", "grade": 7.0}, {"name": "eccentricity_pinion", "amplitude_m": 1.5e-5}))
-    case = Case(pair=pair, operating=OperatingPoint(1300.0, TORQUE), duration_s=0.1, fs_hz=12800.0,
-                effects=effects, **pits)
-    compiled = simulate([case])[0]
-    monkeypatch.setattr(newmark, "COMPILED_UPDATE", False)
-    reference = simulate([case])[0]
-    assert compiled.metadata["solver"]["method"] == "periodic"
-    for k in reference.channels:
-        assert np.array_equal(compiled.channels[k], reference.channels[k]), k
