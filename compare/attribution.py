@@ -37,7 +37,7 @@ from compare.candidates import (Attribution, AttributionSettings, CandidateResul
 from compare.chaos import chaotic_realisations, may_be_chaotic, profile_ladder
 from compare.comparison import NOISE_DRAWS, Reference, evaluate, simulate_model
 from compare.error import effective_count
-from compare.fitspace import CHAIN_EFFECTS, fit_space
+from compare.fitspace import CHAIN_EFFECTS, bounds_hit, fit_space
 from compare.fitting import (explained_keys, frequency_ladder, prepared_case, record_period_s, search_group,
                              transient_groups, window_label, window_s)
 from gearpit.errors import GearpitError
@@ -131,6 +131,9 @@ def attribute(ref: Reference, model, baseline_residual: np.ndarray, *, candidate
         for c in results:
             if c.effect in transient:
                 c.model_error_db = float(model_error_db)
+    for c in results:
+        if c.params:
+            c.at_bound = bounds_hit(fit_space(get(c.effect)), c.params)
     results.sort(key=lambda c: -c.reduction)
     claimed = choose_claim(results, settings)
     return Attribution(candidates=results, unexplained=unexplained_of(results, disagreements, settings), elapsed_s=time.perf_counter() - t0,

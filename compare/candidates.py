@@ -44,7 +44,9 @@ attribution's coarse step (omega_max dt = 0.5) is 20 % of the RMS off the conver
 Other effects that also pass the threshold are listed as alternatives
 (several effects can leave similar lines); those within ``rival_reduction`` of
 the claimed one are its *rivals* (:func:`rivals_of`): these views cannot tell
-them apart, and further measured channels may (:mod:`compare.channels`). A disagreement of the baseline larger than
+them apart, and further measured channels may (:mod:`compare.channels`). Among rivals, one whose
+identified parameters all lie inside their search range is claimed before one with a parameter on a bound
+(:func:`interior_rival`). A disagreement of the baseline larger than
 ``unexplained_db`` that no claimed effect halves is reported as unexplained:
 nothing in the registry accounts for it, and no attribution is forced.
 """
@@ -132,6 +134,8 @@ class CandidateResult:
     model_error_db: float = math.nan
     #: the joint refit of the claimed effect with the nuisances (compare.joint_refit): what was tried and kept
     joint_refit: dict | None = None
+    #: fitted parameters that ended on a bound of their search ("lower" / "upper"; compare.fitspace.bounds_hit)
+    at_bound: dict = field(default_factory=dict)
 
     @property
     def worst_view_rise_db(self) -> float:
@@ -167,7 +171,13 @@ class CandidateResult:
                 "interval": {k: list(v) for k, v in self.interval.items()},
                 "realisation_scatter_db": self.realisation_scatter_db,
                 "model_error_db": self.model_error_db if math.isfinite(self.model_error_db) else None,
-                "joint_refit": self.joint_refit}
+                "joint_refit": self.joint_refit, "at_bound": dict(self.at_bound)}
+
+    @property
+    def pinned(self) -> list[str]:
+        """The identified parameters (finite 1-sigma) that ended on a bound of their search: the measurement asks
+        for a value the effect's range does not allow (:func:`interior_rival`)."""
+        return [k for k in self.at_bound if math.isfinite(self.sigma.get(k, math.inf))]
 
 
 @dataclass
@@ -219,8 +229,33 @@ def choose_claim(results: list, settings: AttributionSettings) -> CandidateResul
         if c.reduction < settings.claim_reduction:
             return None
         if c.status == "fitted" and passes_claim_rule(c, settings):
-            c.claimed = True
-            return c
+            chosen = interior_rival(c, results, settings) or c
+            chosen.claimed = True
+            if chosen is not c:          # first in the list, as a claim the further channels moved (compare.channels)
+                results.sort(key=lambda r: not r.claimed)
+            return chosen
+    return None
+
+
+def interior_rival(best: CandidateResult, results: list, settings: AttributionSettings) -> CandidateResult | None:
+    """When the best passing candidate ``best`` has an identified parameter pinned on a bound of its search
+    (:attr:`CandidateResult.pinned`) and a rival (passes the claim rule within ``rival_reduction``) fits with
+    none pinned, that rival (the best such); else None.
+
+    Why: the views cannot tell rivals apart by the error, but a fit that ends on its bound says the measurement
+    asks for more (or less) of that effect than its range allows - the cumulative pitch error of the coarsest
+    ISO grade, 12 - while the rival reaches the measurement inside its range. Found on the independent simulator
+    of ``tests/foreign_rig.py``: a wheel eccentricity of 50 um was claimed as the wheel's pitch error at grade 12,
+    its bound (48.5 % against 46.9 % for the eccentricity, fitted at 59 um); a pinion eccentricity of 100 um on
+    another pair (23/61 teeth, module 3 mm) as the pinion's, grade 12 (71.4 % against 71.2 %, 150 um). On one
+    gear both are a once-per-revolution transmission error; an eccentricity that large is a pitch error past
+    every ISO grade. The pinned candidate stays listed as a rival."""
+    if not best.pinned:
+        return None
+    for r in results:
+        if (r is not best and r.status == "fitted" and not r.pinned and passes_claim_rule(r, settings)
+                and best.reduction - r.reduction <= settings.rival_reduction):
+            return r
     return None
 
 

@@ -95,6 +95,27 @@ def fit_space(effect_cls) -> FitSpace:
     return FitSpace(effect_cls.name, params, choice, bool(probe.is_nonlinear or probe.is_nonstationary))
 
 
+#: a fitted value within this fraction of the search coordinate's span of a bound is on the bound
+BOUND_TOL_U = 1e-3
+
+
+def bounds_hit(space: FitSpace, params: dict) -> dict:
+    """The numeric parameters of ``params`` (fitted values of ``space``'s effect) that lie on a bound of their
+    search: name -> "lower" or "upper" (within :data:`BOUND_TOL_U` in the search coordinate; on a log scale the
+    lower end is where the search starts, ``max(lo, hi / 1000)``)."""
+    out = {}
+    for p in space.params:
+        v = params.get(p.name)
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            continue
+        u = float(p.to_u(v))
+        if u <= BOUND_TOL_U:
+            out[p.name] = "lower"
+        elif u >= 1.0 - BOUND_TOL_U:
+            out[p.name] = "upper"
+    return out
+
+
 def grid(p: FitParameter, n: int = GRID_POINTS) -> np.ndarray:
     """``n`` values spread evenly in the search coordinate (ends excluded: a bound is rarely the answer)."""
     return p.from_u((np.arange(n) + 0.5) / n)

@@ -192,6 +192,7 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
         for c in att["candidates"]:
             ps = ", ".join(f"{k}={_fmt(v)}" + (describe_interval(c["interval"][k]) if k in c.get("interval", {}) else
                                                 (f" \u00b1 {_fmt(c['sigma'].get(k))}" if k in c["sigma"] else ""))
+                           + (f" (on its {c['at_bound'][k]} bound)" if k in c.get("at_bound", {}) else "")
                            for k, v in c["params"].items())
             rows.append([c["effect"], f"{100 * c['reduction']:.1f} %", _fmt(c["error_db"]), _fmt(c["baseline_error_db"]),
                          _fmt(c.get("worst_view_rise_db")), ps, c["window"], "claimed" if c["claimed"] else "",
@@ -206,7 +207,9 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
                      "larger), unless the model already agrees with the measurement within the noise (excess "
                      "error below the noise error); a time-stepped effect is fitted on a window and measured on "
                      "the whole record before it is ranked, and must lower the comparison's own error by 30 % "
-                     "too.</p>")
+                     "too. A parameter on a bound of its search asks for a value the effect's range does not allow; among effects "
+                     "that lower the error alike (within 5 %), one whose identified parameters are all inside their "
+                     "range is claimed before one with a parameter on a bound.</p>")
         top = next((c for c in att["candidates"] if c["claimed"]), None)
         if top is not None and top.get("joint_refit"):
             from compare.joint_refit import joint_refit_message

@@ -121,6 +121,13 @@ SCHEMA = {
                                                                      "between the nearest values the measurement "
                                                                      "rejects, null: not bounded on that side; "
                                                                      "empty for a regular record"},
+                                                        "at_bound": {"type": "object",
+                                                                     "additionalProperties": {
+                                                                         "enum": ["lower", "upper"]},
+                                                                     "description": "fitted parameters on a "
+                                                                     "bound of their search; among rivals one "
+                                                                     "without an identified parameter on a "
+                                                                     "bound is claimed first"},
                                                         "realisation_scatter_db": {
                                                             "type": ["number", "null"],
                                                             "description": "1-sigma of the error over "

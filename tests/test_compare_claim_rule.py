@@ -157,6 +157,76 @@ def test_rivals_are_the_effects_the_views_cannot_tell_from_the_claim():
     assert rivals_of(None, ranked, settings) == []
 
 
+def test_a_rival_fitted_inside_its_range_is_claimed_before_one_pinned_on_a_bound():
+    """choose_claim / interior_rival, on the numbers of the independent simulator (tests/foreign_rig.py, 23/61
+    teeth, module 3 mm, 1500 rpm, a pinion eccentricity of 100 um; `gearpit compare` from the bare model): the
+    pinion's pitch error fitted at grade 12, the upper bound of its search (+/- 0.54), took 71.4 % off the error,
+    the pinion eccentricity 71.2 % at 150 um, inside its range. The eccentricity is claimed and put first, the
+    pitch error stays its rival. Not moved: a pinned candidate without a rival within 5 %, a rival that is pinned
+    too, and a parameter on a bound that the fit does not identify (infinite sigma: the bound says nothing)."""
+    import math
+
+    from compare.candidates import AttributionSettings, CandidateResult, choose_claim, rivals_of
+    from compare.fitspace import bounds_hit, fit_space
+    from datagen.effects import get
+
+    base = {"order": 15.97, "envelope": 22.40}
+
+    def cand(name, total, params, sigma):
+        c = CandidateResult(name, "", dict(params), dict(sigma), total, 16.49, {"order": total, "envelope": total},
+                            "2 s", 1, baseline_view_error_db=base)
+        c.at_bound = bounds_hit(fit_space(get(name)), c.params)
+        return c
+
+    settings = AttributionSettings()
+    pitch = cand("pitch_error", 4.72, {"grade": 12.0, "gears": "pinion"}, {"grade": 0.54})
+    ecc = cand("eccentricity_pinion", 4.74, {"amplitude_m": 150e-6}, {"amplitude_m": 21e-6})
+    torque = cand("torque_fluctuation", 7.17, {"frequency_hz": 25.0, "amplitude_fraction": 0.68},
+                  {"frequency_hz": math.inf, "amplitude_fraction": 0.09})
+    assert pitch.at_bound == {"grade": "upper"} and pitch.pinned == ["grade"]
+    assert ecc.at_bound == {} and ecc.pinned == []
+    ranked = [pitch, ecc, torque]
+    claimed = choose_claim(ranked, settings)
+    assert claimed is ecc and ranked[0] is ecc and not pitch.claimed
+    assert rivals_of(claimed, ranked, settings) == ["pitch_error"]
+    # the same pinned fit 6 % ahead of the interior one: no rival, the pinned fit is claimed (and stays first)
+    pitch6 = cand("pitch_error", 3.75, {"grade": 12.0, "gears": "pinion"}, {"grade": 0.54})
+    ranked = [pitch6, cand("eccentricity_pinion", 4.74, {"amplitude_m": 150e-6}, {"amplitude_m": 21e-6})]
+    assert choose_claim(ranked, settings) is pitch6 and ranked[0] is pitch6
+    # both pinned: the better one is claimed
+    pitch_b = cand("pitch_error", 4.72, {"grade": 12.0, "gears": "pinion"}, {"grade": 0.54})
+    ecc_b = cand("eccentricity_pinion", 4.74, {"amplitude_m": 200e-6}, {"amplitude_m": 21e-6})
+    assert ecc_b.at_bound == {"amplitude_m": "upper"}
+    assert choose_claim([pitch_b, ecc_b], settings) is pitch_b
+    # a parameter on its bound that the fit does not identify does not pin the candidate
+    loose = cand("pitch_error", 4.72, {"grade": 12.0, "gears": "pinion"}, {"grade": math.inf})
+    assert loose.at_bound == {"grade": "upper"} and loose.pinned == []
+    assert choose_claim([loose, cand("eccentricity_pinion", 4.74, {"amplitude_m": 150e-6},
+                                     {"amplitude_m": 21e-6})], settings) is loose
+
+
+def test_bounds_hit_reads_the_search_coordinate_of_every_registered_effect():
+    """compare.fitspace.bounds_hit: a fitted value at either end of its search (on a log scale the lower end is
+    hi / 1000, where the search starts) is on a bound, one a step of the default grid inside is not; for every
+    registered effect's fitted parameters."""
+    from compare.fitspace import bounds_hit, fit_space, grid
+    from datagen.effects import get, names
+
+    checked = 0
+    for n in names():
+        space = fit_space(get(n))
+        for p in space.params:
+            lo_u, hi_u = float(p.from_u(0.0)), float(p.from_u(1.0))
+            assert bounds_hit(space, {p.name: lo_u}) == {p.name: "lower"}, (n, p.name)
+            assert bounds_hit(space, {p.name: hi_u}) == {p.name: "upper"}, (n, p.name)
+            inner = grid(p)
+            assert bounds_hit(space, {p.name: float(inner[0])}) == {}, (n, p.name)
+            assert bounds_hit(space, {p.name: float(inner[-1])}) == {}, (n, p.name)
+            checked += 1
+        assert bounds_hit(space, {"gears": "pinion"}) == {}
+    assert checked >= 10
+
+
 def test_a_claim_whose_amount_the_record_does_not_bound_escalates():
     """compare.escalation.escalation_reason, on candidates built from the backlash example (30 um, 2 N m; band's
     mesh record, seed 3): as written backlash is claimed at 60 % but its whole-record ladder ends on a plateau,
