@@ -136,6 +136,9 @@ class CandidateResult:
     joint_refit: dict | None = None
     #: fitted parameters that ended on a bound of their search ("lower" / "upper"; compare.fitspace.bounds_hit)
     at_bound: dict = field(default_factory=dict)
+    #: parameters whose search trials rise in error moving off a bound (name -> that bound), i.e. the fit would go
+    #: past it (compare.fitting.rises_off_bound); a parameter on a bound that the error does not depend on is not
+    rises_off_bound: dict = field(default_factory=dict)
 
     @property
     def worst_view_rise_db(self) -> float:
@@ -171,13 +174,13 @@ class CandidateResult:
                 "interval": {k: list(v) for k, v in self.interval.items()},
                 "realisation_scatter_db": self.realisation_scatter_db,
                 "model_error_db": self.model_error_db if math.isfinite(self.model_error_db) else None,
-                "joint_refit": self.joint_refit, "at_bound": dict(self.at_bound)}
+                "joint_refit": self.joint_refit, "at_bound": dict(self.at_bound), "pinned": self.pinned}
 
     @property
     def pinned(self) -> list[str]:
-        """The identified parameters (finite 1-sigma) that ended on a bound of their search: the measurement asks
-        for a value the effect's range does not allow (:func:`interior_rival`)."""
-        return [k for k in self.at_bound if math.isfinite(self.sigma.get(k, math.inf))]
+        """The parameters on a bound of their search whose error rises moving off it: the measurement asks for a
+        value the effect's range does not allow (:func:`interior_rival`)."""
+        return [k for k, side in self.at_bound.items() if self.rises_off_bound.get(k) == side]
 
 
 @dataclass

@@ -200,7 +200,37 @@ def _result(s: Search, base, ref: Reference, n_eff: float, disagreements) -> Can
                         baseline_view_error_db=base.excess_view_db)
     c.set_raw(best.view_error_db, best.error_db)
     c.runners_up = [_params_of(s, t) for t in _distinct_best(s, RUNNERS_UP)[1:]]
+    c.rises_off_bound = rises_off_bound(s, best, base.total_db)
     return c
+
+
+#: rises_off_bound: trials at least this far from the bound (search coordinate) make the profile off it
+PROFILE_STEP_U = 0.05
+#: ... and the best of them must lie above the best trial by this fraction of what the effect explains (raw dB,
+#: the baseline's error less the best trial's), and by at least PROFILE_RISE_MIN_DB
+PROFILE_RISE = 0.05
+PROFILE_RISE_MIN_DB = 0.02
+
+
+def rises_off_bound(s: Search, best: Trial, baseline_db: float) -> dict:
+    """The parameters of ``best`` (the best trial of search ``s``) that sit on a bound of their search coordinate
+    while every trial at least :data:`PROFILE_STEP_U` off that bound, whatever its other parameters, has a higher
+    error by :data:`PROFILE_RISE` of what the effect explains: name -> "lower" / "upper". That is a fit the bound
+    stops (the error still falls towards it), unlike a parameter the error does not depend on, which may end on a
+    bound too (its 1-sigma is infinite in both cases, so the sigma cannot tell them apart)."""
+    from compare.fitspace import BOUND_TOL_U
+
+    out = {}
+    gain = max(baseline_db - best.error_db, 0.0)
+    for j, p in enumerate(s.space.params):
+        u = float(best.u[j])
+        side = "lower" if u <= BOUND_TOL_U else ("upper" if u >= 1.0 - BOUND_TOL_U else None)
+        if side is None:
+            continue
+        away = [t.error_db for t in s.trials if math.isfinite(t.error_db) and abs(float(t.u[j]) - u) >= PROFILE_STEP_U]
+        if away and min(away) - best.error_db >= max(PROFILE_RISE_MIN_DB, PROFILE_RISE * gain):
+            out[p.name] = side
+    return out
 
 
 #: a time-stepped candidate gets the fine ladders (compare.search.round_fine) when its best window fit has cut the

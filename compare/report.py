@@ -192,7 +192,8 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
         for c in att["candidates"]:
             ps = ", ".join(f"{k}={_fmt(v)}" + (describe_interval(c["interval"][k]) if k in c.get("interval", {}) else
                                                 (f" \u00b1 {_fmt(c['sigma'].get(k))}" if k in c["sigma"] else ""))
-                           + (f" (on its {c['at_bound'][k]} bound)" if k in c.get("at_bound", {}) else "")
+                           + ((" (pinned" if k in c.get("pinned", ()) else " (") + f" on its {c['at_bound'][k]} bound)"
+                              if k in c.get("at_bound", {}) else "")
                            for k, v in c["params"].items())
             rows.append([c["effect"], f"{100 * c['reduction']:.1f} %", _fmt(c["error_db"]), _fmt(c["baseline_error_db"]),
                          _fmt(c.get("worst_view_rise_db")), ps, c["window"], "claimed" if c["claimed"] else "",
@@ -207,9 +208,9 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
                      "larger), unless the model already agrees with the measurement within the noise (excess "
                      "error below the noise error); a time-stepped effect is fitted on a window and measured on "
                      "the whole record before it is ranked, and must lower the comparison's own error by 30 % "
-                     "too. A parameter on a bound of its search asks for a value the effect's range does not allow; among effects "
-                     "that lower the error alike (within 5 %), one whose identified parameters are all inside their "
-                     "range is claimed before one with a parameter on a bound.</p>")
+                     "too. A parameter pinned on a bound of its search (its error still falls towards it) asks for "
+                     "a value the effect's range does not allow; among effects that lower the error alike (within "
+                     "5 %), one with no parameter pinned is claimed before one with a pinned parameter.</p>")
         top = next((c for c in att["candidates"] if c["claimed"]), None)
         if top is not None and top.get("joint_refit"):
             from compare.joint_refit import joint_refit_message

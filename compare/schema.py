@@ -125,9 +125,12 @@ SCHEMA = {
                                                                      "additionalProperties": {
                                                                          "enum": ["lower", "upper"]},
                                                                      "description": "fitted parameters on a "
-                                                                     "bound of their search; among rivals one "
-                                                                     "without an identified parameter on a "
-                                                                     "bound is claimed first"},
+                                                                     "bound of their search"},
+                                                        "pinned": {"type": "array", "items": {"type": "string"},
+                                                                   "description": "those of at_bound whose error "
+                                                                   "rises off the bound (the fit would go past "
+                                                                   "it); among rivals one with none pinned is "
+                                                                   "claimed first"},
                                                         "realisation_scatter_db": {
                                                             "type": ["number", "null"],
                                                             "description": "1-sigma of the error over "

@@ -160,29 +160,27 @@ def test_rivals_are_the_effects_the_views_cannot_tell_from_the_claim():
 def test_a_rival_fitted_inside_its_range_is_claimed_before_one_pinned_on_a_bound():
     """choose_claim / interior_rival, on the numbers of the independent simulator (tests/foreign_rig.py, 23/61
     teeth, module 3 mm, 1500 rpm, a pinion eccentricity of 100 um; `gearpit compare` from the bare model): the
-    pinion's pitch error fitted at grade 12, the upper bound of its search (+/- 0.54), took 71.4 % off the error,
-    the pinion eccentricity 71.2 % at 150 um, inside its range. The eccentricity is claimed and put first, the
-    pitch error stays its rival. Not moved: a pinned candidate without a rival within 5 %, a rival that is pinned
-    too, and a parameter on a bound that the fit does not identify (infinite sigma: the bound says nothing)."""
-    import math
-
+    pinion's pitch error fitted at grade 12, the upper bound of its search, with the error still falling towards
+    it, took 71.4 % off the error, the pinion eccentricity 71.2 % at 150 um, inside its range. The eccentricity is
+    claimed and put first, the pitch error stays its rival. Not moved: a pinned candidate without a rival within
+    5 %, a rival that is pinned too, and a parameter on a bound that the error does not depend on."""
     from compare.candidates import AttributionSettings, CandidateResult, choose_claim, rivals_of
     from compare.fitspace import bounds_hit, fit_space
     from datagen.effects import get
 
     base = {"order": 15.97, "envelope": 22.40}
 
-    def cand(name, total, params, sigma):
-        c = CandidateResult(name, "", dict(params), dict(sigma), total, 16.49, {"order": total, "envelope": total},
+    def cand(name, total, params, rises=None):
+        c = CandidateResult(name, "", dict(params), {}, total, 16.49, {"order": total, "envelope": total},
                             "2 s", 1, baseline_view_error_db=base)
         c.at_bound = bounds_hit(fit_space(get(name)), c.params)
+        c.rises_off_bound = dict(rises or {})
         return c
 
     settings = AttributionSettings()
-    pitch = cand("pitch_error", 4.72, {"grade": 12.0, "gears": "pinion"}, {"grade": 0.54})
-    ecc = cand("eccentricity_pinion", 4.74, {"amplitude_m": 150e-6}, {"amplitude_m": 21e-6})
-    torque = cand("torque_fluctuation", 7.17, {"frequency_hz": 25.0, "amplitude_fraction": 0.68},
-                  {"frequency_hz": math.inf, "amplitude_fraction": 0.09})
+    pitch = cand("pitch_error", 4.72, {"grade": 12.0, "gears": "pinion"}, {"grade": "upper"})
+    ecc = cand("eccentricity_pinion", 4.74, {"amplitude_m": 150e-6})
+    torque = cand("torque_fluctuation", 7.17, {"frequency_hz": 25.0, "amplitude_fraction": 0.68})
     assert pitch.at_bound == {"grade": "upper"} and pitch.pinned == ["grade"]
     assert ecc.at_bound == {} and ecc.pinned == []
     ranked = [pitch, ecc, torque]
@@ -190,19 +188,49 @@ def test_a_rival_fitted_inside_its_range_is_claimed_before_one_pinned_on_a_bound
     assert claimed is ecc and ranked[0] is ecc and not pitch.claimed
     assert rivals_of(claimed, ranked, settings) == ["pitch_error"]
     # the same pinned fit 6 % ahead of the interior one: no rival, the pinned fit is claimed (and stays first)
-    pitch6 = cand("pitch_error", 3.75, {"grade": 12.0, "gears": "pinion"}, {"grade": 0.54})
-    ranked = [pitch6, cand("eccentricity_pinion", 4.74, {"amplitude_m": 150e-6}, {"amplitude_m": 21e-6})]
+    pitch6 = cand("pitch_error", 3.75, {"grade": 12.0, "gears": "pinion"}, {"grade": "upper"})
+    ranked = [pitch6, cand("eccentricity_pinion", 4.74, {"amplitude_m": 150e-6})]
     assert choose_claim(ranked, settings) is pitch6 and ranked[0] is pitch6
     # both pinned: the better one is claimed
-    pitch_b = cand("pitch_error", 4.72, {"grade": 12.0, "gears": "pinion"}, {"grade": 0.54})
-    ecc_b = cand("eccentricity_pinion", 4.74, {"amplitude_m": 200e-6}, {"amplitude_m": 21e-6})
-    assert ecc_b.at_bound == {"amplitude_m": "upper"}
+    pitch_b = cand("pitch_error", 4.72, {"grade": 12.0, "gears": "pinion"}, {"grade": "upper"})
+    ecc_b = cand("eccentricity_pinion", 4.74, {"amplitude_m": 200e-6}, {"amplitude_m": "upper"})
+    assert ecc_b.pinned == ["amplitude_m"]
     assert choose_claim([pitch_b, ecc_b], settings) is pitch_b
-    # a parameter on its bound that the fit does not identify does not pin the candidate
-    loose = cand("pitch_error", 4.72, {"grade": 12.0, "gears": "pinion"}, {"grade": math.inf})
-    assert loose.at_bound == {"grade": "upper"} and loose.pinned == []
-    assert choose_claim([loose, cand("eccentricity_pinion", 4.74, {"amplitude_m": 150e-6},
-                                     {"amplitude_m": 21e-6})], settings) is loose
+    # on the bound, but the error does not rise off it (or rises off the other bound): not pinned
+    for rises in ({}, {"grade": "lower"}):
+        loose = cand("pitch_error", 4.72, {"grade": 12.0, "gears": "pinion"}, rises)
+        assert loose.at_bound == {"grade": "upper"} and loose.pinned == []
+        assert choose_claim([loose, cand("eccentricity_pinion", 4.74, {"amplitude_m": 150e-6})], settings) is loose
+
+
+def test_rises_off_bound_tells_a_fit_the_bound_stops_from_a_parameter_that_does_not_matter():
+    """compare.fitting.rises_off_bound on search trials built by hand (the pitch error's grade, searched on
+    [1, 12]): error falling towards grade 12 -> pinned at "upper"; a flat profile (the parameter does not matter),
+    or a best trial inside the range -> nothing; a rise smaller than 5 % of what the effect explains -> nothing.
+    The measured case: the wheel's pitch error on the foreign simulator (seed 5, wheel eccentricity 50 um) ended
+    at grade 12 with an infinite 1-sigma, as a parameter the error does not depend on has."""
+    from compare.fitspace import fit_space
+    from compare.fitting import rises_off_bound
+    from compare.search import Search
+    from datagen.effects import get
+
+    def search(errors_by_grade):
+        s = Search(get("pitch_error"), fit_space(get("pitch_error")))
+        for g, e in errors_by_grade.items():
+            t = s.point({"grade": g})
+            t.error_db = e
+            s.trials.append(t)
+        return s
+
+    baseline = 12.0      # raw dB; the effect explains 12 - 6 = 6 dB
+    falling = search({3.0: 10.0, 6.0: 8.5, 9.0: 7.2, 11.0: 6.6, 12.0: 6.0})
+    assert rises_off_bound(falling, falling.best, baseline) == {"grade": "upper"}
+    flat = search({3.0: 6.0, 6.0: 6.0, 9.0: 6.0, 11.0: 6.0, 12.0: 6.0})
+    assert rises_off_bound(flat, flat.best, baseline) == {}
+    inside = search({3.0: 10.0, 6.0: 8.5, 9.0: 6.0, 11.0: 6.6, 12.0: 7.0})
+    assert rises_off_bound(inside, inside.best, baseline) == {}
+    small = search({3.0: 6.2, 6.0: 6.2, 11.0: 6.2, 12.0: 6.0})      # 0.2 dB < 5 % of 6 dB
+    assert rises_off_bound(small, small.best, baseline) == {}
 
 
 def test_bounds_hit_reads_the_search_coordinate_of_every_registered_effect():

@@ -56,7 +56,8 @@ def run(args: argparse.Namespace) -> int:
         for cand in out.attribution.candidates:
             ps = ", ".join((f"{k}={v:.4g}" + describe_interval(cand.interval[k]) if k in cand.interval else
                             (f"{k}={v:.4g} +/- {cand.sigma[k]:.2g}" if k in cand.sigma else f"{k}={v}"))
-                           + (f" (on its {cand.at_bound[k]} bound)" if k in cand.at_bound else "")
+                           + ((" (pinned" if k in cand.pinned else " (") + f" on its {cand.at_bound[k]} bound)"
+                              if k in cand.at_bound else "")
                            for k, v in cand.params.items())
             res = out.attribution.resolution
             settled = res is not None and res.get("claimed") == cand.effect and res.get("before") != cand.effect
