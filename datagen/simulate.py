@@ -274,7 +274,7 @@ def prepare(case: Case) -> dynamics.DynamicCase:
                         n_slices=so.n_slices, pit_model=so.pit_model, edges=so.edges)
     dofs = ("phi_m", "phi_1", "y_1", "phi_2", "y_2", "phi_b") + (("z_1", "z_2") if case.pair.is_helical else ())
     ctx = case.context(dofs)
-    rec = mesh_record(ms, case.effects, ctx)
+    rec = mesh_record(ms, case.effects, ctx, keep_slots=any(e.is_nonlinear for e in case.effects))
     model = build_model(case.pair, case.drivetrain, k_mean_n_per_m=float(np.mean(rec.k)),
                         torque_nm=case.operating.torque_nm)
     return dynamics.DynamicCase(model=model, record=rec, effects=case.effects, ctx=ctx,

@@ -318,3 +318,39 @@ def test_time_stepped_cases_solved_in_parts_under_a_record_budget_give_the_same_
             assert np.max(np.abs(a.channels[name] - b.channels[name])) <= 1e-12 * scale, name
         for name in ("acc_pinion_loa_m_s2", "mesh_force_n", "dte_m"):
             assert np.array_equal(a.channels[name], b.channels[name]), name
+
+
+def test_a_linear_case_keeps_no_per_pair_slots_and_gives_the_same_bits(monkeypatch):
+    """datagen.simulate.prepare -> mesh_record(keep_slots=...): a case without a nonlinear mesh law keeps no per-pair
+    stiffness and deviation (zero columns: four fifths of a record's memory), one with backlash keeps them; every
+    channel of a periodic and of a time-stepped linear case (pitch error + wheel eccentricity, speed fluctuation)
+    is the same to the bit as when the slots are kept."""
+    import datagen.simulate as sim
+    from datagen.effects import EffectSpec
+    from datagen.mesh_excitation import mesh_record
+
+    def fx(*ds):
+        return tuple(EffectSpec.from_dict(d).build() for d in ds)
+
+    pitch_ecc = fx({"name": "pitch_error", "grade": 8.0}, {"name": "eccentricity_wheel", "amplitude_m": 30e-6})
+    periodic = Case(pair=spur_pair_example(), operating=OperatingPoint(1500.0, 40.0), duration_s=0.1, fs_hz=10000.0,
+                    effects=fx({"name": "pitch_error", "grade": 8.0}))
+    stepped = Case(pair=spur_pair_example(), operating=OperatingPoint(1500.0, 40.0), duration_s=0.08, fs_hz=10000.0,
+                   effects=pitch_ecc + fx({"name": "speed_fluctuation", "amplitude_fraction": 0.02,
+                                           "frequency_hz": 11.0}),
+                   solver=SolverOptions(method="transient", transient_s=0.03))
+    backlash = Case(pair=spur_pair_example(), operating=OperatingPoint(1500.0, 40.0), duration_s=0.05, fs_hz=10000.0,
+                    effects=fx({"name": "backlash", "backlash_m": 20e-6}), solver=SolverOptions(transient_s=0.02))
+    lean = sim.prepare(stepped).record
+    assert lean.k_slots.shape == (lean.k.size, 0) and lean.e_slots.shape == (lean.k.size, 0)
+    assert sim.prepare(backlash).record.k_slots.shape[1] >= 2
+    got = simulate([periodic, stepped])
+    assert got[0].metadata["solver"]["method"] == "periodic"
+    monkeypatch.setattr(sim, "mesh_record", lambda ms, effects, ctx, keep_slots=True: mesh_record(ms, effects, ctx))
+    full = sim.prepare(stepped).record
+    assert full.k_slots.shape[1] >= 2
+    assert np.array_equal(full.k, lean.k) and np.array_equal(full.error_force, lean.error_force)
+    ref = simulate([periodic, stepped])
+    for a, b in zip(ref, got):
+        for name in a.channels:
+            assert np.array_equal(a.channels[name], b.channels[name]), name
