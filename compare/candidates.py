@@ -44,9 +44,9 @@ attribution's coarse step (omega_max dt = 0.5) is 20 % of the RMS off the conver
 Other effects that also pass the threshold are listed as alternatives
 (several effects can leave similar lines); those within ``rival_reduction`` of
 the claimed one are its *rivals* (:func:`rivals_of`): these views cannot tell
-them apart, and further measured channels may (:mod:`compare.channels`). Among rivals, one whose
-identified parameters all lie inside their search range is claimed before one with a parameter on a bound
-(:func:`interior_rival`). A disagreement of the baseline larger than
+them apart, and further measured channels may (:mod:`compare.channels`). Among rivals, one with no
+parameter pinned on a bound of its search (the error still falling towards it) is claimed before one with such a
+parameter (:func:`interior_rival`). A disagreement of the baseline larger than
 ``unexplained_db`` that no claimed effect halves is reported as unexplained:
 nothing in the registry accounts for it, and no attribution is forced.
 """
@@ -183,6 +183,14 @@ class CandidateResult:
         return [k for k, side in self.at_bound.items() if self.rises_off_bound.get(k) == side]
 
 
+def bound_note(name: str, at_bound: dict, pinned) -> str:
+    """What the CLI and the report append to a fitted parameter on a bound: " (pinned on its upper bound)" when
+    the error still falls towards it, " (on its upper bound)" otherwise, "" inside its range."""
+    if name not in at_bound:
+        return ""
+    return (" (pinned" if name in pinned else " (") + f" on its {at_bound[name]} bound)"
+
+
 @dataclass
 class Attribution:
     candidates: list            # CandidateResult, best first
@@ -241,8 +249,8 @@ def choose_claim(results: list, settings: AttributionSettings) -> CandidateResul
 
 
 def interior_rival(best: CandidateResult, results: list, settings: AttributionSettings) -> CandidateResult | None:
-    """When the best passing candidate ``best`` has an identified parameter pinned on a bound of its search
-    (:attr:`CandidateResult.pinned`) and a rival (passes the claim rule within ``rival_reduction``) fits with
+    """When the best passing candidate ``best`` has a parameter pinned on a bound of its search (the error still
+    falls towards it: :attr:`CandidateResult.pinned`) and a rival (passes the claim rule within ``rival_reduction``) fits with
     none pinned, that rival (the best such); else None.
 
     Why: the views cannot tell rivals apart by the error, but a fit that ends on its bound says the measurement

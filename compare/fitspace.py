@@ -99,20 +99,23 @@ def fit_space(effect_cls) -> FitSpace:
 BOUND_TOL_U = 1e-3
 
 
+def bound_side(u: float) -> str | None:
+    """"lower" / "upper" when the search coordinate ``u`` is within :data:`BOUND_TOL_U` of that bound, else None."""
+    return "lower" if u <= BOUND_TOL_U else ("upper" if u >= 1.0 - BOUND_TOL_U else None)
+
+
 def bounds_hit(space: FitSpace, params: dict) -> dict:
     """The numeric parameters of ``params`` (fitted values of ``space``'s effect) that lie on a bound of their
-    search: name -> "lower" or "upper" (within :data:`BOUND_TOL_U` in the search coordinate; on a log scale the
-    lower end is where the search starts, ``max(lo, hi / 1000)``)."""
+    search: name -> "lower" or "upper" (:func:`bound_side`; on a log scale the lower end is where the search
+    starts, ``max(lo, hi / 1000)``)."""
     out = {}
     for p in space.params:
         v = params.get(p.name)
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
             continue
-        u = float(p.to_u(v))
-        if u <= BOUND_TOL_U:
-            out[p.name] = "lower"
-        elif u >= 1.0 - BOUND_TOL_U:
-            out[p.name] = "upper"
+        side = bound_side(float(p.to_u(v)))
+        if side is not None:
+            out[p.name] = side
     return out
 
 

@@ -218,13 +218,13 @@ def rises_off_bound(s: Search, best: Trial, baseline_db: float) -> dict:
     error by :data:`PROFILE_RISE` of what the effect explains: name -> "lower" / "upper". That is a fit the bound
     stops (the error still falls towards it), unlike a parameter the error does not depend on, which may end on a
     bound too (its 1-sigma is infinite in both cases, so the sigma cannot tell them apart)."""
-    from compare.fitspace import BOUND_TOL_U
+    from compare.fitspace import bound_side
 
     out = {}
     gain = max(baseline_db - best.error_db, 0.0)
     for j, p in enumerate(s.space.params):
         u = float(best.u[j])
-        side = "lower" if u <= BOUND_TOL_U else ("upper" if u >= 1.0 - BOUND_TOL_U else None)
+        side = bound_side(u)
         if side is None:
             continue
         away = [t.error_db for t in s.trials if math.isfinite(t.error_db) and abs(float(t.u[j]) - u) >= PROFILE_STEP_U]

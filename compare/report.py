@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from compare.candidates import bound_note
 from compare.chaos import describe_interval
 from compare.escalation import reason_text
 from gearpit import __version__
@@ -192,8 +193,7 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
         for c in att["candidates"]:
             ps = ", ".join(f"{k}={_fmt(v)}" + (describe_interval(c["interval"][k]) if k in c.get("interval", {}) else
                                                 (f" \u00b1 {_fmt(c['sigma'].get(k))}" if k in c["sigma"] else ""))
-                           + ((" (pinned" if k in c.get("pinned", ()) else " (") + f" on its {c['at_bound'][k]} bound)"
-                              if k in c.get("at_bound", {}) else "")
+                           + bound_note(k, c.get("at_bound", {}), c.get("pinned", ()))
                            for k, v in c["params"].items())
             rows.append([c["effect"], f"{100 * c['reduction']:.1f} %", _fmt(c["error_db"]), _fmt(c["baseline_error_db"]),
                          _fmt(c.get("worst_view_rise_db")), ps, c["window"], "claimed" if c["claimed"] else "",

@@ -31,6 +31,7 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from compare.candidates import bound_note
     from compare.chaos import describe_interval
     from compare.ledger import history_table
     from compare.workflow import run as run_loop
@@ -56,8 +57,7 @@ def run(args: argparse.Namespace) -> int:
         for cand in out.attribution.candidates:
             ps = ", ".join((f"{k}={v:.4g}" + describe_interval(cand.interval[k]) if k in cand.interval else
                             (f"{k}={v:.4g} +/- {cand.sigma[k]:.2g}" if k in cand.sigma else f"{k}={v}"))
-                           + ((" (pinned" if k in cand.pinned else " (") + f" on its {cand.at_bound[k]} bound)"
-                              if k in cand.at_bound else "")
+                           + bound_note(k, cand.at_bound, cand.pinned)
                            for k, v in cand.params.items())
             res = out.attribution.resolution
             settled = res is not None and res.get("claimed") == cand.effect and res.get("before") != cand.effect
