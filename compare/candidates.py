@@ -188,7 +188,7 @@ def bound_note(name: str, at_bound: dict, pinned) -> str:
     the error still falls towards it, " (on its upper bound)" otherwise, "" inside its range."""
     if name not in at_bound:
         return ""
-    return (" (pinned" if name in pinned else " (") + f" on its {at_bound[name]} bound)"
+    return (" (pinned on" if name in pinned else " (on") + f" its {at_bound[name]} bound)"
 
 
 @dataclass
