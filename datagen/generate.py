@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import multiprocessing
 import sys
+import threading
 import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass
@@ -197,16 +198,29 @@ def generate(sweep: Sweep, out: str | Path, *, workers: int = 1, dask_address: s
     return RunReport(Path(out), sweep.n_shards, computed, len(done), sweep.n_samples, time.monotonic() - t0, cpu)
 
 
-def _run_pool(sweep: Sweep, todo: list[int], workers: int):
-    """Shards on a local process pool; at most ``2 * workers`` in flight (memory stays bounded).
+def pool_context() -> multiprocessing.context.BaseContext:
+    """How the pool's workers start: ``fork`` where that is safe, else ``forkserver``.
 
-    Workers fork from a fresh server process that has imported the simulator
-    once (``forkserver``): cheaper than ``spawn``, safer than ``fork`` from a
-    parent that may run threads (torch, Dask).
+    A forked worker has the simulator already imported (1.4 s of imports per
+    pool otherwise, a quarter of a 2-worker run of ``experiments/sweeps/bench.toml``).
+    Forking is safe from a Linux parent that runs no other Python thread and
+    has not loaded torch (whose OpenMP pool does not survive a fork); the
+    executor starts every forked worker before its own manager thread. Any
+    other parent (a notebook with torch, a Dask client's threads, macOS) gets
+    workers forked from a fresh server process that imports the simulator once
+    (``forkserver``). Both give the same bytes (the shards are pure functions).
     """
+    if sys.platform == "linux" and threading.active_count() == 1 and "torch" not in sys.modules:
+        return multiprocessing.get_context("fork")
     ctx = multiprocessing.get_context("forkserver")
     ctx.set_forkserver_preload(["datagen.generate", "datagen.simulate"])
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx)
+    return ctx
+
+
+def _run_pool(sweep: Sweep, todo: list[int], workers: int):
+    """Shards on a local process pool (:func:`pool_context`); at most ``2 * workers`` in flight (memory stays
+    bounded)."""
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=pool_context())
     try:
         pending, queue = set(), list(todo)
         while queue or pending:

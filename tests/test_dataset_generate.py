@@ -40,13 +40,45 @@ def reference(sweep, tmp_path_factory):
     return out
 
 
-def test_two_workers_give_identical_bytes(sweep, reference, tmp_path):
-    """A 2-process pool writes byte-identical files (every file, metadata included) to the in-process run.
+@pytest.mark.parametrize("start", ["fork", "forkserver"])
+def test_two_workers_give_identical_bytes(sweep, reference, tmp_path, monkeypatch, start):
+    """A 2-process pool writes byte-identical files (every file, metadata included) to the in-process run,
+    with workers forked from this process and with workers from a fork server (:func:`pool_context` picks one).
 
     Source: issue 4 ("identical bytes for 1 and 2 workers"); exact (sha256).
     """
+    import multiprocessing
+
+    from datagen import generate as gen
+
+    ctx = multiprocessing.get_context(start)
+    monkeypatch.setattr(gen, "pool_context", lambda: ctx)
     generate(sweep, tmp_path / "ds", workers=2, progress=False)
     assert digest(tmp_path / "ds") == digest(reference)
+
+
+def test_workers_fork_only_from_a_parent_without_threads_or_torch():
+    """The pool forks from a single-threaded Linux parent without torch, and uses the fork server otherwise:
+    a fork while another thread holds a lock, or after torch started its OpenMP pool, can hang the worker.
+
+    Source: the Python documentation of ``multiprocessing`` (contexts and start methods); exact.
+    """
+    import threading
+
+    code = ("import sys, threading; from datagen.generate import pool_context; a = pool_context().get_start_method();"
+            " import torch; b = pool_context().get_start_method(); print(a, b)")
+    out = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, check=True)
+    assert out.stdout.split() == (["fork", "forkserver"] if sys.platform == "linux" else ["forkserver"] * 2)
+    from datagen.generate import pool_context
+
+    stop = threading.Event()
+    t = threading.Thread(target=stop.wait)
+    t.start()
+    try:
+        assert pool_context().get_start_method() == "forkserver"
+    finally:
+        stop.set()
+        t.join()
 
 
 def test_killed_run_resumes_to_identical_bytes(reference, tmp_path):
