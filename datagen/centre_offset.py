@@ -37,8 +37,9 @@ from gearpit.errors import require
 SUBDIVISIONS = 8
 #: sum unstaggered slices before the rule (slots_at_centre_offset; False: slice by slice, the tests' reference)
 MERGE_UNSTAGGERED = True
-#: a one-slice record's points by the compiled rule (:func:`datagen.compiled_records.points_one_slice`, the same bits); False: the numpy
-#: rule :func:`_points` (the tests' reference)
+#: a one-slice record's points by the compiled rule (:func:`datagen.compiled_records.points_one_slice`, the same bits),
+#: and :func:`refine_slots` by :func:`datagen.compiled_records.refine_slots_into`; False: the numpy rules
+#: (:func:`_points`, the tests' reference)
 COMPILED = True
 #: elements (positions x pairs x slices) per block of the vectorised evaluation (bounds the memory)
 _BLOCK_ELEMENTS = 1 << 16
@@ -423,6 +424,12 @@ def refine_slots(x: np.ndarray, positions_per_cycle: int, subdivisions: int) -> 
     """
     q, ppc = subdivisions, positions_per_cycle
     n, S = x.shape
+    if COMPILED and S >= 1:
+        from datagen.compiled_records import refine_slots_into
+
+        out = np.empty((n * q, S + 1))
+        refine_slots_into(np.ascontiguousarray(x, dtype=float), ppc, q, out)
+        return out
     x = np.pad(x, ((0, 0), (0, 1)))                        # the entering pair: not in contact yet
     nxt = np.roll(x, -1, axis=0)
     last = (np.arange(n) % ppc) == ppc - 1                 # the next sample of slot s is in slot s + 1

@@ -64,3 +64,31 @@ def points_one_slice(v, e0, e1, d_start, d_end, i0, i1, ppc, q, snap, out):
             else:
                 value = (1.0 - t) * v_a + t * v_b
             out[i, col] = share * value
+
+
+@njit(cache=True)
+def refine_slots_into(x, ppc, q, out):
+    """:func:`datagen.centre_offset.refine_slots` of ``x`` (n, S) into ``out`` (n * q, S + 1): each pair linearly
+    interpolated between its own grid samples, the same IEEE operations in the same order (``t = j / q``,
+    ``a * (1 - t) + b * t``), element by element (the numpy rule's padded, rolled and broadcast temporaries were
+    a quarter of a hunting-period record's build)."""
+    n, S = x.shape
+    for i in range(n):
+        i1 = i + 1 if i + 1 < n else 0
+        last = (i % ppc) == ppc - 1
+        for j in range(q):
+            t = j / q
+            u = 1.0 - t
+            r = i * q + j
+            for c in range(S + 1):
+                a = x[i, c] if c < S else 0.0
+                if last:            # across the cycle boundary pair s moves to slot s + 1
+                    if c < S - 1:
+                        b = x[i1, c + 1]
+                    elif c == S - 1:
+                        b = 0.0
+                    else:
+                        b = x[i1, 0]
+                else:
+                    b = x[i1, c] if c < S else 0.0
+                out[r, c] = a * u + b * t
