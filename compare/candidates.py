@@ -139,6 +139,9 @@ class CandidateResult:
     #: parameters whose search trials rise in error moving off a bound (name -> that bound), i.e. the fit would go
     #: past it (compare.fitting.rises_off_bound); a parameter on a bound that the error does not depend on is not
     rises_off_bound: dict = field(default_factory=dict)
+    #: a fitted fluctuation (hook 5): the swing of the pinion speed and of the mesh force it makes in the model
+    #: (compare.response.fluctuation_response); empty for every other effect
+    response: dict = field(default_factory=dict)
 
     @property
     def worst_view_rise_db(self) -> float:
@@ -174,7 +177,8 @@ class CandidateResult:
                 "interval": {k: list(v) for k, v in self.interval.items()},
                 "realisation_scatter_db": self.realisation_scatter_db,
                 "model_error_db": self.model_error_db if math.isfinite(self.model_error_db) else None,
-                "joint_refit": self.joint_refit, "at_bound": dict(self.at_bound), "pinned": self.pinned}
+                "joint_refit": self.joint_refit, "at_bound": dict(self.at_bound), "pinned": self.pinned,
+                "response": dict(self.response)}
 
     @property
     def pinned(self) -> list[str]:

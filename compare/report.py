@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from compare.candidates import bound_note
+from compare.response import response_text
 from compare.chaos import describe_interval
 from compare.escalation import reason_text
 from gearpit import __version__
@@ -195,6 +196,8 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
                                                 (f" \u00b1 {_fmt(c['sigma'].get(k))}" if k in c["sigma"] else ""))
                            + bound_note(k, c.get("at_bound", {}), c.get("pinned", ()))
                            for k, v in c["params"].items())
+            if c.get("response"):
+                ps += "; " + response_text(c["response"])
             rows.append([c["effect"], f"{100 * c['reduction']:.1f} %", _fmt(c["error_db"]), _fmt(c["baseline_error_db"]),
                          _fmt(c.get("worst_view_rise_db")), ps, c["window"], "claimed" if c["claimed"] else "",
                          c["signature"]])

@@ -131,6 +131,19 @@ SCHEMA = {
                                                                    "rises off the bound (the fit would go past "
                                                                    "it); among rivals one with none pinned is "
                                                                    "claimed first"},
+                                                        "response": {
+                                                            "type": "object",
+                                                            "properties": {
+                                                                "frequency_hz": {"type": "number"},
+                                                                "speed_pinion_amplitude_fraction": {"type": "number"},
+                                                                "mesh_force_amplitude_fraction": {"type": "number"},
+                                                                "reference_amplitude_fraction": {"type": "number"}},
+                                                            "description": "a fitted fluctuation (hook 5; "
+                                                            "compare.response): the amplitude of the pinion speed "
+                                                            "and of the mesh force at its frequency in the model, "
+                                                            "over their means, what a rig's encoder or torque meter "
+                                                            "would show (the fitted amplitude_fraction is the "
+                                                            "drive's, before the drive train); empty otherwise"},
                                                         "realisation_scatter_db": {
                                                             "type": ["number", "null"],
                                                             "description": "1-sigma of the error over "

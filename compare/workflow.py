@@ -36,6 +36,7 @@ from compare.joint_refit import joint_refit_message
 from compare.ledger import append_row, last_candidate, ledger_path, make_row, read_ledger
 from compare.measurement import load_measurement
 from compare.model import ComparisonModel, parse_add
+from compare.response import attach_responses
 from compare.report import document, write_html, write_json
 from datagen.effects import EffectSpec, get, load_plugin
 
@@ -117,6 +118,9 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
                                    candidates=candidates, settings=settings or AttributionSettings(seed=seed),
                                    seed=seed, parallel=parallel)
     comparison, att = staged.comparison, staged.attribution
+    if att is not None:
+        attach_responses(att.candidates, comparison.model, measurement.pair, speed_rpm=ref.speed.speed_rpm,
+                         torque_nm=measurement.torque_nm)
     escalation = staged.summary()
     if staged.escalated:
         messages.append(f"model as written: error {escalation['as_written_error_db']:.2f} dB; "

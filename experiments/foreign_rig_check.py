@@ -21,7 +21,8 @@ models' difference, and the user's loop (``gearpit compare --add``, :func:`compa
 three comparisons) adds it and goes on. So a case passes when, along the loop, the hidden effect's *family* is
 claimed (the same physical signature in gearpit's registry: :data:`FOREIGN_CASES`) with only mesh-shape effects
 claimed before it, the final model keeps at most half of the first comparison's error, and the parameter a user
-would read off (a frequency, an eccentricity) is within the stated tolerance. A control (no effect, a bearing
+would read off (a frequency, an eccentricity; for a fluctuation also what it does to the shafts in the model,
+:data:`RESPONSE_CHECKS`) is within the stated tolerance. A control (no effect, a bearing
 defect) passes when no effect outside the mesh-shape ones is claimed. The stricter reading - the hidden effect
 claimed at the first comparison and halving the error alone - is printed beside it.
 """
@@ -58,6 +59,14 @@ FOREIGN_CASES = {
                            ("frequency_hz", "ratio", 1.05, 37.0)),
 }
 
+#: case -> (response quantity of compare.response, tolerance as a ratio, true value): what the foreign rig's
+#: fluctuation does to the shafts. Its speed fluctuation is imposed on the pinion's rotation (a swing of 1 %); its
+#: torque fluctuation passes the mesh quasi-statically (the mesh force swings by 20 %). The fitted
+#: ``amplitude_fraction`` is what enters gearpit's drive train (the speed loop's reference, the load torque), so
+#: the claimed fluctuation's response in the model is what is compared with the truth.
+RESPONSE_CHECKS = {"speed_fluctuation": ("speed_pinion_amplitude_fraction", 1.5, 0.01),
+                   "torque_fluctuation": ("mesh_force_amplitude_fraction", 1.5, 0.2)}
+
 
 def run_case(name: str, *, seed: int = 5, duration_s: float = 2.0, steps: int = 3, log=print) -> dict:
     """The loop (:func:`compare.synthetic.compare_loop`, up to ``steps`` comparisons) on one foreign case; returns
@@ -92,6 +101,21 @@ def run_case(name: str, *, seed: int = 5, duration_s: float = 2.0, steps: int = 
             ratio = max(fit / true, true / fit) if fit > 0 else float("inf")
             ok_fit = ratio <= tol
             row["fit"] = f"{p}: {fit:.4g} vs {true:.4g} (ratio {ratio:.3g} <= {tol})"
+        if at is not None and name in RESPONSE_CHECKS:
+            from compare.response import fluctuation_response
+            from datagen.effects import EffectSpec
+
+            q, tol, true = RESPONSE_CHECKS[name]
+            eff = EffectSpec.from_dict({"name": ledger[at]["claimed"], **ledger[at]["claimed_params"]}).build()
+            from compare.comparison import prepare_reference
+
+            speed = prepare_reference(m).speed.speed_rpm                     # measured, as the comparison's
+            resp = fluctuation_response(model, m.pair, eff, speed_rpm=speed, torque_nm=m.torque_nm)
+            ratio = max(resp[q] / true, true / resp[q]) if resp[q] > 0 else float("inf")
+            ok_fit = ok_fit and ratio <= tol
+            row["response"] = resp
+            row["fit"] = (row.get("fit", "") + f"; {ledger[at]['claimed']} in the model: {q} {resp[q]:.4g} vs "
+                          f"{true:.4g} (ratio {ratio:.3g} <= {tol})")
         row["found_at_step"] = at
         row["pass"] = ok_effect and ok_half and ok_fit
         row["verdict"] = ("yes" if row["pass"] else

@@ -32,6 +32,7 @@ def register(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from compare.candidates import bound_note
+    from compare.response import response_text
     from compare.chaos import describe_interval
     from compare.ledger import history_table
     from compare.workflow import run as run_loop
@@ -63,6 +64,8 @@ def run(args: argparse.Namespace) -> int:
             settled = res is not None and res.get("claimed") == cand.effect and res.get("before") != cand.effect
             mark = ("  <- claimed" + (" (on the further channels)" if settled else "")) if cand.claimed else ""
             print(f"  {cand.effect:20s} {100 * cand.reduction:6.1f} %  {ps}{mark}")
+            if cand.response:
+                print(f"  {'':20s} {'':8s} {response_text(cand.response)}")
         for u in out.attribution.unexplained:
             print(f"  unexplained by every registered effect: {u['text']}")
     print("ledger:")
