@@ -110,3 +110,24 @@ def test_responses_go_to_fitted_fluctuations_only(model):
     with pytest.raises(InputError, match="effect"):
         fluctuation_response(model, preset("spur-gds"), effect("pitch_error", grade=7.0), speed_rpm=SPEED_RPM,
                              torque_nm=TORQUE_NM)
+
+
+def test_a_candidate_with_a_response_fits_the_documented_schema(model):
+    """The JSON of a candidate with a response validates against compare.schema (the candidate items of
+    ``attribution``), and a response with a string where a number belongs does not: the schema describes it."""
+    import copy
+
+    jsonschema = pytest.importorskip("jsonschema")
+    from compare.schema import SCHEMA
+
+    item = SCHEMA["properties"]["attribution"]["properties"]["candidates"]["items"]
+    c = _cand("speed_fluctuation", frequency_hz=19.0, amplitude_fraction=0.02)
+    attach_responses([c], model, preset("spur-gds"), speed_rpm=SPEED_RPM, torque_nm=TORQUE_NM)
+    doc = c.to_dict()
+    jsonschema.validate(doc, item)
+    assert set(doc["response"]) == {"frequency_hz", "reference_amplitude_fraction", "speed_pinion_amplitude_fraction",
+                                    "mesh_force_amplitude_fraction"}
+    bad = copy.deepcopy(doc)
+    bad["response"]["speed_pinion_amplitude_fraction"] = "1 %"
+    with pytest.raises(jsonschema.ValidationError):
+        jsonschema.validate(bad, item)
