@@ -197,7 +197,7 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
                            + bound_note(k, c.get("at_bound", {}), c.get("pinned", ()))
                            for k, v in c["params"].items())
             if c.get("response"):
-                ps += "; " + response_text(c["response"])
+                ps += "; " + response_text(c["response"], c["effect"])
             rows.append([c["effect"], f"{100 * c['reduction']:.1f} %", _fmt(c["error_db"]), _fmt(c["baseline_error_db"]),
                          _fmt(c.get("worst_view_rise_db")), ps, c["window"], "claimed" if c["claimed"] else "",
                          c["signature"]])

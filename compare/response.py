@@ -11,7 +11,10 @@ swing of the pinion: the fit was right, its parameter is not the quantity a user
 So every fitted candidate that acts through the operating point gets its *response* (:func:`fluctuation_response`):
 the model with that candidate simulated on whole cycles of the fluctuation after a settling time, and the
 amplitudes of the pinion speed and of the mesh force at the fluctuation frequency (one DFT bin over whole cycles,
-i.e. a lock-in) as fractions of their means.
+i.e. a lock-in) as fractions of their means. With the comparison's reference it also gets the modulation type of
+the sidebands at that frequency in the measurement and in the model (:mod:`compare.modulation`): a load swinging
+while the speed holds makes amplitude modulation, a speed swing frequency modulation, and on one accelerometer the
+two can match in level while the shafts move differently.
 """
 from __future__ import annotations
 
@@ -100,18 +103,38 @@ def fluctuation_response(model, pair, effect, *, speed_rpm: float, torque_nm: fl
     return out
 
 
-def response_text(response: dict) -> str:
-    """One line on what a fitted fluctuation does to the shafts (CLI, report, messages)."""
+def response_text(response: dict, effect: str = "it") -> str:
+    """One line on what a fitted fluctuation does to the shafts (CLI, report, messages); with the modulation
+    types, a second sentence on them (:func:`compare.modulation.modulation_text`)."""
+    from compare.modulation import modulation_text
+
+    mod = response.get("modulation")
+    tail = ("; " + modulation_text(mod["measured"], mod["model"], effect, response["frequency_hz"])) if mod else ""
     return (f"in the model the pinion speed swings +/-{100 * response['speed_pinion_amplitude_fraction']:.3g} % "
             f"and the mesh force +/-{100 * response['mesh_force_amplitude_fraction']:.3g} % at "
             f"{response['frequency_hz']:.4g} Hz (the fitted amplitude_fraction "
             f"{response['reference_amplitude_fraction']:.4g} is what enters the drive train: the speed "
-            f"controller's reference or the load torque)")
+            f"controller's reference or the load torque)" + tail)
 
 
-def attach_responses(candidates, model, pair, *, speed_rpm: float, torque_nm: float, limit: int = 2) -> int:
+def modulations(reference, model, effect, f_hz: float) -> dict:
+    """The modulation type of the sidebands at ``f_hz`` (:func:`compare.modulation.modulation_type`) in the
+    measurement of ``reference`` and in ``model`` with ``effect``, simulated as the comparison does."""
+    from compare.comparison import simulate_model
+    from compare.modulation import modulation_type
+
+    mesh_hz = reference.measurement.pair.pinion.teeth * reference.speed.speed_rpm / 60.0
+    (y,) = simulate_model(reference, model, extra_effects_list=((effect,),))
+    return {"measured": modulation_type(reference.x, reference.fs_hz, mesh_hz, f_hz),
+            "model": modulation_type(y, reference.fs_hz, mesh_hz, f_hz)}
+
+
+def attach_responses(candidates, model, pair, *, speed_rpm: float, torque_nm: float, limit: int = 2,
+                     reference=None) -> int:
     """Set ``response`` of the fitted candidates (status "fitted", reduction > 0) that act through the operating
-    point, at most ``limit`` of them in list order; returns how many were set."""
+    point, at most ``limit`` of them in list order; returns how many were set. With the comparison's
+    ``reference`` also ``response["modulation"]``: the modulation type of the sidebands at the fluctuation
+    frequency in the measurement and in the model with the candidate (:mod:`compare.modulation`)."""
     from datagen.effects import EffectSpec
 
     n = 0
@@ -122,9 +145,11 @@ def attach_responses(candidates, model, pair, *, speed_rpm: float, torque_nm: fl
             continue
         effect = EffectSpec.from_dict({"name": c.effect, **c.params}).build()
         c.response = fluctuation_response(model, pair, effect, speed_rpm=speed_rpm, torque_nm=torque_nm)
+        if reference is not None:
+            c.response["modulation"] = modulations(reference, model, effect, c.response["frequency_hz"])
         n += 1
     return n
 
 
-__all__ = ["acts_on_operating_point", "attach_responses", "fluctuation_response", "line_amplitude",
+__all__ = ["acts_on_operating_point", "attach_responses", "modulations", "fluctuation_response", "line_amplitude",
            "response_text"]

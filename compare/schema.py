@@ -137,7 +137,27 @@ SCHEMA = {
                                                                 "frequency_hz": {"type": "number"},
                                                                 "speed_pinion_amplitude_fraction": {"type": "number"},
                                                                 "mesh_force_amplitude_fraction": {"type": "number"},
-                                                                "reference_amplitude_fraction": {"type": "number"}},
+                                                                "reference_amplitude_fraction": {"type": "number"},
+                                                                "modulation": {
+                                                                    "type": "object",
+                                                                    "description": "compare.modulation: the "
+                                                                    "sidebands' modulation type at the frequency "
+                                                                    "in the measurement and in the model with "
+                                                                    "the candidate",
+                                                                    "additionalProperties": {
+                                                                        "type": "object",
+                                                                        "required": ["type", "read"],
+                                                                        "properties": {
+                                                                            "type": {"enum": [
+                                                                                "amplitude", "frequency",
+                                                                                "mixed", "none"]},
+                                                                            "balance": {"type": "number"},
+                                                                            "amplitude": {"type": "integer"},
+                                                                            "frequency": {"type": "integer"},
+                                                                            "read": {"type": "integer"},
+                                                                            "cos_arg_q": {
+                                                                                "type": "array",
+                                                                                "items": _NUM}}}}},
                                                             "description": "a fitted fluctuation (hook 5; "
                                                             "compare.response): the amplitude of the pinion speed "
                                                             "and of the mesh force at its frequency in the model, "

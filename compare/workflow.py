@@ -120,7 +120,7 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
     comparison, att = staged.comparison, staged.attribution
     if att is not None:
         attach_responses(att.candidates, comparison.model, measurement.pair, speed_rpm=ref.speed.speed_rpm,
-                         torque_nm=measurement.torque_nm)
+                         torque_nm=measurement.torque_nm, reference=ref)
     escalation = staged.summary()
     if staged.escalated:
         messages.append(f"model as written: error {escalation['as_written_error_db']:.2f} dB; "

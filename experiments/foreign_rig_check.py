@@ -102,20 +102,24 @@ def run_case(name: str, *, seed: int = 5, duration_s: float = 2.0, steps: int = 
             ok_fit = ratio <= tol
             row["fit"] = f"{p}: {fit:.4g} vs {true:.4g} (ratio {ratio:.3g} <= {tol})"
         if at is not None and name in RESPONSE_CHECKS:
-            from compare.response import fluctuation_response
+            from compare.response import fluctuation_response, modulations
             from datagen.effects import EffectSpec
 
             q, tol, true = RESPONSE_CHECKS[name]
             eff = EffectSpec.from_dict({"name": ledger[at]["claimed"], **ledger[at]["claimed_params"]}).build()
             from compare.comparison import prepare_reference
 
-            speed = prepare_reference(m).speed.speed_rpm                     # measured, as the comparison's
+            ref = prepare_reference(m)
+            speed = ref.speed.speed_rpm                                      # measured, as the comparison's
             resp = fluctuation_response(model, m.pair, eff, speed_rpm=speed, torque_nm=m.torque_nm)
+            resp["modulation"] = modulations(ref, model, eff, resp["frequency_hz"])
             ratio = max(resp[q] / true, true / resp[q]) if resp[q] > 0 else float("inf")
             ok_fit = ok_fit and ratio <= tol
             row["response"] = resp
+            mod = resp["modulation"]
             row["fit"] = (row.get("fit", "") + f"; {ledger[at]['claimed']} in the model: {q} {resp[q]:.4g} vs "
-                          f"{true:.4g} (ratio {ratio:.3g} <= {tol})")
+                          f"{true:.4g} (ratio {ratio:.3g} <= {tol}); sidebands measured {mod['measured']['type']}, "
+                          f"model {mod['model']['type']} modulation")
         row["found_at_step"] = at
         row["pass"] = ok_effect and ok_half and ok_fit
         row["verdict"] = ("yes" if row["pass"] else

@@ -131,3 +131,26 @@ def test_a_candidate_with_a_response_fits_the_documented_schema(model):
     bad["response"]["speed_pinion_amplitude_fraction"] = "1 %"
     with pytest.raises(jsonschema.ValidationError):
         jsonschema.validate(bad, item)
+
+
+def test_the_foreign_load_swing_reads_as_amplitude_and_gearpits_fluctuations_as_frequency_modulation(model):
+    """The independent simulator of tests/foreign_rig.py holds the speed and swings the mesh force by 20 % at 37 Hz:
+    its sidebands are amplitude modulation. gearpit's speed fluctuation fitted to it (36.45 Hz, reference 1.43 %,
+    docs/compare_validation.md "Stop 44") and its torque fluctuation alike swing the pinion's speed: frequency
+    modulation. attach_responses with the comparison's reference reports both, and the CLI's line names the
+    difference. Source: compare.modulation (Randall 2011, 3.6.2); measured 8 of 10 harmonics each way."""
+    from compare.comparison import prepare_reference
+    from compare.response import response_text
+    from foreign_rig import ForeignRig, foreign_measurement
+
+    m = foreign_measurement(ForeignRig(seed=5, duration_s=1.0, torque_fluctuation=(0.2, 37.0)))
+    ref = prepare_reference(m)
+    cands = [_cand("speed_fluctuation", frequency_hz=36.45, amplitude_fraction=0.0143),
+             _cand("torque_fluctuation", frequency_hz=36.95, amplitude_fraction=0.0169)]
+    attach_responses(cands, model, m.pair, speed_rpm=ref.speed.speed_rpm, torque_nm=m.torque_nm, reference=ref)
+    for c in cands:
+        mod = c.response["modulation"]
+        assert mod["measured"]["type"] == "amplitude", mod["measured"]
+        assert mod["model"]["type"] == "frequency", mod["model"]
+    text = response_text(cands[0].response, "speed_fluctuation")
+    assert "the load swings while the speed holds" in text and "in the model the speed swings" in text

@@ -65,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
             mark = ("  <- claimed" + (" (on the further channels)" if settled else "")) if cand.claimed else ""
             print(f"  {cand.effect:20s} {100 * cand.reduction:6.1f} %  {ps}{mark}")
             if cand.response:
-                print(f"  {'':20s} {'':8s} {response_text(cand.response)}")
+                print(f"  {'':20s} {'':8s} {response_text(cand.response, cand.effect)}")
         for u in out.attribution.unexplained:
             print(f"  unexplained by every registered effect: {u['text']}")
     print("ledger:")
