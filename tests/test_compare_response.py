@@ -154,3 +154,7 @@ def test_the_foreign_load_swing_reads_as_amplitude_and_gearpits_fluctuations_as_
         assert mod["model"]["type"] == "frequency", mod["model"]
     text = response_text(cands[0].response, "speed_fluctuation")
     assert "the load swings while the speed holds" in text and "in the model the speed swings" in text
+    jsonschema = pytest.importorskip("jsonschema")
+    from compare.schema import SCHEMA
+
+    jsonschema.validate(cands[0].to_dict(), SCHEMA["properties"]["attribution"]["properties"]["candidates"]["items"])
