@@ -35,11 +35,13 @@ FS_HZ = 5000.0
 
 
 def acts_on_operating_point(effect_name: str) -> bool:
-    """True for an effect with hook 5 (``operating_point``) and a fluctuation frequency (``frequency_hz``)."""
+    """True for an effect with hook 5 (``operating_point``), a fluctuation frequency (``frequency_hz``) and an
+    ``amplitude_fraction`` (a plugin acting on the operating point without them gets no response)."""
     from datagen.effects import get
 
     cls = get(effect_name)
-    return "operating_point" in cls.hooks() and "frequency_hz" in getattr(cls, "__dataclass_fields__", {})
+    fields = getattr(cls, "__dataclass_fields__", {})
+    return "operating_point" in cls.hooks() and "frequency_hz" in fields and "amplitude_fraction" in fields
 
 
 def fluctuation_frequency(effect, speed_rpm: float) -> float:
@@ -84,7 +86,7 @@ def fluctuation_response(model, pair, effect, *, speed_rpm: float, torque_nm: fl
     from datagen.simulate import simulate
 
     require(acts_on_operating_point(effect.name), "effect", effect.name,
-            "an effect with hook 5 (operating_point) and a frequency_hz")
+            "an effect with hook 5 (operating_point), a frequency_hz and an amplitude_fraction")
     f = fluctuation_frequency(effect, speed_rpm)
     require(math.isfinite(f) and f > 0, f"effects.{effect.name}.frequency_hz", f, "> 0 Hz")
     cycles = max(MIN_CYCLES, math.ceil(MIN_SECONDS * f))
