@@ -28,6 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from features.spectra import line_phasors
+
 #: a harmonic is read when both sidebands reach this fraction of its carrier
 MIN_SIDEBAND_RATIO = 0.02
 #: a harmonic is read when its carrier reaches this fraction of the strongest carrier among those read for
@@ -41,12 +43,9 @@ MAX_HARMONIC = 10
 
 
 def line(x: np.ndarray, fs_hz: float, f_hz: float) -> complex:
-    """Complex amplitude of the line at ``f_hz`` (Hann-windowed direct DFT: a pure ``A cos(2 pi f t + p)`` gives
-    ``A exp(i p)``)."""
-    n = x.size
-    t = np.arange(n) / fs_hz
-    w = np.hanning(n)
-    return complex(2.0 * np.sum(x * w * np.exp(-2j * np.pi * f_hz * t)) / np.sum(w))
+    """Complex amplitude of the line at ``f_hz`` (:func:`features.spectra.line_phasors`, Hann window: a pure
+    ``A cos(2 pi f t + p)`` gives ``A exp(i p)``)."""
+    return complex(line_phasors(x, fs_hz, [f_hz])[0])
 
 
 def modulation_type(x, fs_hz: float, mesh_hz: float, f_s_hz: float, *, max_harmonic: int = MAX_HARMONIC) -> dict:
@@ -67,11 +66,10 @@ def modulation_type(x, fs_hz: float, mesh_hz: float, f_s_hz: float, *, max_harmo
     """
     x = np.asarray(x, dtype=float)
     x = x - x.mean()
-    lines = {}
-    for k in range(1, max_harmonic + 1):
-        fc = k * mesh_hz
-        if fc + f_s_hz < 0.5 * fs_hz and fc - f_s_hz > 0:
-            lines[k] = (line(x, fs_hz, fc), line(x, fs_hz, fc + f_s_hz), line(x, fs_hz, fc - f_s_hz))
+    ks = [k for k in range(1, max_harmonic + 1) if k * mesh_hz + f_s_hz < 0.5 * fs_hz and k * mesh_hz - f_s_hz > 0]
+    freqs = [f for k in ks for f in (k * mesh_hz, k * mesh_hz + f_s_hz, k * mesh_hz - f_s_hz)]
+    z = line_phasors(x, fs_hz, freqs) if freqs else np.zeros(0, dtype=complex)
+    lines = {k: tuple(z[3 * i:3 * i + 3]) for i, k in enumerate(ks)}     # carrier, upper, lower
     strongest = max((abs(v[0]) for v in lines.values()), default=0.0)
     cos_q, am, fm, read = [], 0, 0, 0
     for k in range(1, max_harmonic + 1):

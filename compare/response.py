@@ -59,9 +59,10 @@ def line_amplitude(x: np.ndarray, f_hz: float, fs_hz: float) -> float:
     >>> round(line_amplitude(3.0 + 0.2 * np.sin(2 * np.pi * 10 * t + 1.0), 10.0, 5000.0), 12)
     0.2
     """
+    from features.spectra import line_amplitudes
+
     x = np.asarray(x, dtype=float)
-    t = np.arange(x.size) / fs_hz
-    return float(2.0 * abs(np.mean((x - x.mean()) * np.exp(-2j * np.pi * f_hz * t))))
+    return float(line_amplitudes(x - x.mean(), fs_hz, [f_hz], window="boxcar")[0])
 
 
 def fluctuation_response(model, pair, effect, *, speed_rpm: float, torque_nm: float) -> dict:
@@ -96,11 +97,10 @@ def fluctuation_response(model, pair, effect, *, speed_rpm: float, torque_nm: fl
                       extra_effects=(effect,), solver={"method": "transient", "transient_s": SETTLE_S})
     (sig,) = simulate([case], channels=["speed_pinion_rpm", "mesh_force_n"])
     out = {"frequency_hz": f, "reference_amplitude_fraction": float(effect.amplitude_fraction)}
+    n = int(round(duration * sig.fs_hz))                     # whole cycles
     for name, key in (("speed_pinion_rpm", "speed_pinion_amplitude_fraction"),
                       ("mesh_force_n", "mesh_force_amplitude_fraction")):
-        x = np.asarray(sig.channels[name], dtype=float)
-        n = int(round(duration * sig.fs_hz))                 # whole cycles
-        x = x[:n]
+        x = np.asarray(sig.channels[name], dtype=float)[:n]
         out[key] = line_amplitude(x, f, sig.fs_hz) / abs(float(x.mean()))
     return out
 

@@ -66,9 +66,15 @@ def amplitude_spectrum(x: np.ndarray, fs_hz: float, *, window: Window = "hann") 
 
 
 def line_amplitudes(x: np.ndarray, fs_hz: float, freqs_hz, *, window: Window = "hann") -> np.ndarray:
-    """Amplitudes of ``x`` at arbitrary frequencies by a windowed DFT (no scalloping).
+    """Amplitudes of ``x`` at arbitrary frequencies by a windowed DFT (no scalloping): ``|line_phasors|``."""
+    return np.abs(line_phasors(x, fs_hz, freqs_hz, window=window))
 
-    ``A(f) = 2 |sum_n x_n w_n exp(-2 pi i f n / fs)| / sum(w)``. Lines closer than
+
+def line_phasors(x: np.ndarray, fs_hz: float, freqs_hz, *, window: Window = "hann") -> np.ndarray:
+    """Complex amplitudes of ``x`` at arbitrary frequencies by a windowed DFT: ``A cos(2 pi f t + p)`` gives
+    ``A exp(i p)``.
+
+    ``P(f) = 2 sum_n x_n w_n exp(-2 pi i f n / fs) / sum(w)``. Lines closer than
     the window's main-lobe half width (2 bins for Hann, i.e. ``2 fs / n``) leak
     into each other.
 
@@ -89,12 +95,12 @@ def line_amplitudes(x: np.ndarray, fs_hz: float, freqs_hz, *, window: Window = "
     w = _window(a.size, window)
     xw = a * w
     n = np.arange(a.size)
-    out = np.empty(f.size)
+    out = np.empty(f.size, dtype=complex)
     # blocks keep the complex exponential matrix small
     for i0 in range(0, f.size, 64):
         fb = f[i0:i0 + 64]
         e = np.exp(-2j * np.pi * np.outer(fb / fs_hz, n))
-        out[i0:i0 + 64] = 2.0 * np.abs(e @ xw) / w.sum()
+        out[i0:i0 + 64] = 2.0 * (e @ xw) / w.sum()
     return out
 
 
