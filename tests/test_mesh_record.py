@@ -9,7 +9,6 @@ from datagen.geometry import preset
 from datagen.stiffness import mesh_stiffness
 
 
-
 def test_minimal_period_equals_the_whole_array_test_on_every_divisor():
     """datagen.mesh_excitation.minimal_period tries a divisor on the second period first; its answer must be the
     definition's (the smallest divisor ``d`` of ``P`` after which every array repeats, tested on the whole array),
