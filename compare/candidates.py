@@ -142,6 +142,9 @@ class CandidateResult:
     #: a fitted fluctuation (hook 5): the swing of the pinion speed and of the mesh force it makes in the model
     #: (compare.response.fluctuation_response); empty for every other effect
     response: dict = field(default_factory=dict)
+    #: a claimed fluctuation whose sidebands read another modulation type than the measurement's: its refit on
+    #: the sidebands (compare.sideband_fit), None when not run
+    sideband_fit: dict | None = None
 
     @property
     def worst_view_rise_db(self) -> float:
@@ -178,7 +181,7 @@ class CandidateResult:
                 "realisation_scatter_db": self.realisation_scatter_db,
                 "model_error_db": self.model_error_db if math.isfinite(self.model_error_db) else None,
                 "joint_refit": self.joint_refit, "at_bound": dict(self.at_bound), "pinned": self.pinned,
-                "response": dict(self.response)}
+                "response": dict(self.response), "sideband_fit": self.sideband_fit}
 
     @property
     def pinned(self) -> list[str]:

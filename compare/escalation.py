@@ -205,6 +205,7 @@ def compare_and_attribute(measurement, model, *, reference=None, calibrate=None,
     from compare.calibration import calibrated_compare
     from compare.comparison import prepare_reference
     from compare.joint_refit import refit_claim_jointly
+    from compare.sideband_fit import refit_on_sidebands
 
     mode = resolve_mode(model, calibrate)
     ref = reference if reference is not None else prepare_reference(measurement)
@@ -217,6 +218,7 @@ def compare_and_attribute(measurement, model, *, reference=None, calibrate=None,
                           disagreements=c.disagreements, parallel=parallel, calibration=c.calibration,
                           model_error_db=c.evaluation.residuals.excess_total_db)
             settle_rivals(ref, c, a, settings, seed=seed)
+            refit_on_sidebands(ref, c, a, seed=seed)      # a claimed fluctuation whose sidebands disagree only
             refit_claim_jointly(ref, c, a, settings, parallel=parallel)     # a calibrated pass's claim only
         return a
 

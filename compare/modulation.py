@@ -48,6 +48,27 @@ def line(x: np.ndarray, fs_hz: float, f_hz: float) -> complex:
     return complex(line_phasors(x, fs_hz, [f_hz])[0])
 
 
+def sideband_lines(x, fs_hz: float, mesh_hz: float, f_s_hz: float, *, max_harmonic: int = MAX_HARMONIC) -> dict:
+    """Harmonic ``k`` (1-based) -> the complex amplitudes ``(C, U, L)`` of ``k f_m``, ``k f_m + f_s`` and
+    ``k f_m - f_s`` in ``x`` (mean removed), for the harmonics whose three lines lie in ``(0, fs/2)``."""
+    x = np.asarray(x, dtype=float)
+    x = x - x.mean()
+    ks = [k for k in range(1, max_harmonic + 1) if k * mesh_hz + f_s_hz < 0.5 * fs_hz and k * mesh_hz - f_s_hz > 0]
+    freqs = [f for k in ks for f in (k * mesh_hz, k * mesh_hz + f_s_hz, k * mesh_hz - f_s_hz)]
+    z = line_phasors(x, fs_hz, freqs) if freqs else np.zeros(0, dtype=complex)
+    return {k: tuple(z[3 * i:3 * i + 3]) for i, k in enumerate(ks)}
+
+
+def read_harmonics(lines: dict) -> list:
+    """The harmonics of :func:`sideband_lines` whose sidebands stand out: both at least
+    :data:`MIN_SIDEBAND_RATIO` of the carrier, the carrier at least :data:`MIN_CARRIER_FRACTION` of the strongest
+    (a missing harmonic's carrier and sidebands are both leakage, with any ratio)."""
+    strongest = max((abs(v[0]) for v in lines.values()), default=0.0)
+    return [k for k, (c, u, lo) in sorted(lines.items())
+            if abs(c) > 0 and abs(c) >= MIN_CARRIER_FRACTION * strongest
+            and min(abs(u), abs(lo)) >= MIN_SIDEBAND_RATIO * abs(c)]
+
+
 def modulation_type(x, fs_hz: float, mesh_hz: float, f_s_hz: float, *, max_harmonic: int = MAX_HARMONIC) -> dict:
     """Read the modulation of the mesh harmonics at ``f_s_hz`` in ``x`` (module docstring).
 
@@ -64,23 +85,14 @@ def modulation_type(x, fs_hz: float, mesh_hz: float, f_s_hz: float, *, max_harmo
         between, "none" when fewer than two harmonics are read; ``cos_arg_q``: per harmonic ``k`` (1-based) the
         value, None where not read.
     """
-    x = np.asarray(x, dtype=float)
-    x = x - x.mean()
-    ks = [k for k in range(1, max_harmonic + 1) if k * mesh_hz + f_s_hz < 0.5 * fs_hz and k * mesh_hz - f_s_hz > 0]
-    freqs = [f for k in ks for f in (k * mesh_hz, k * mesh_hz + f_s_hz, k * mesh_hz - f_s_hz)]
-    z = line_phasors(x, fs_hz, freqs) if freqs else np.zeros(0, dtype=complex)
-    lines = {k: tuple(z[3 * i:3 * i + 3]) for i, k in enumerate(ks)}     # carrier, upper, lower
-    strongest = max((abs(v[0]) for v in lines.values()), default=0.0)
+    lines = sideband_lines(x, fs_hz, mesh_hz, f_s_hz, max_harmonic=max_harmonic)
+    read_ks = set(read_harmonics(lines))
     cos_q, am, fm, read = [], 0, 0, 0
     for k in range(1, max_harmonic + 1):
-        if k not in lines:
+        if k not in read_ks:
             cos_q.append(None)
             continue
         c, u, lo = lines[k]
-        if (abs(c) == 0 or abs(c) < MIN_CARRIER_FRACTION * strongest
-                or min(abs(u), abs(lo)) < MIN_SIDEBAND_RATIO * abs(c)):
-            cos_q.append(None)
-            continue
         q = u * lo / c ** 2
         v = float(q.real / abs(q))
         cos_q.append(v)
@@ -110,4 +122,4 @@ def modulation_text(measured: dict, model: dict, effect: str, f_s_hz: float) -> 
     return text
 
 
-__all__ = ["line", "modulation_text", "modulation_type"]
+__all__ = ["line", "modulation_text", "modulation_type", "read_harmonics", "sideband_lines"]

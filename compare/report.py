@@ -220,6 +220,11 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
 
             parts.append("<p><b>Joint refit:</b> " + html.escape(joint_refit_message(
                 top["effect"], top["joint_refit"], top["params"], top.get("nuisance") or {})) + ".</p>")
+        if top is not None and top.get("sideband_fit"):
+            from compare.sideband_fit import sideband_fit_message
+
+            parts.append("<p><b>Sideband refit:</b> " + html.escape(sideband_fit_message(
+                top["effect"], top["sideband_fit"])) + ".</p>")
         if att.get("resolution"):
             from compare.channels import resolution_message
 

@@ -146,9 +146,10 @@ def attach_responses(candidates, model, pair, *, speed_rpm: float, torque_nm: fl
         if c.status != "fitted" or not (c.reduction > 0) or not acts_on_operating_point(c.effect):
             continue
         effect = EffectSpec.from_dict({"name": c.effect, **c.params}).build()
-        c.response = fluctuation_response(model, pair, effect, speed_rpm=speed_rpm, torque_nm=torque_nm)
+        fitted = model.with_drivetrain(c.nuisance) if c.nuisance else model      # e.g. a sideband refit's inertia
+        c.response = fluctuation_response(fitted, pair, effect, speed_rpm=speed_rpm, torque_nm=torque_nm)
         if reference is not None:
-            c.response["modulation"] = modulations(reference, model, effect, c.response["frequency_hz"])
+            c.response["modulation"] = modulations(reference, fitted, effect, c.response["frequency_hz"])
         n += 1
     return n
 

@@ -15,6 +15,26 @@ _NUM = {"type": ["number", "null"]}
 _STR = {"type": ["string", "null"]}
 _ERRORS = {"type": "object", "required": ["total"], "additionalProperties": {"type": "number"}}
 
+_TRIAL = {"type": "object", "properties": {
+    "effect": {"type": "string"}, "motor_inertia_kg_m2": {"type": "number"},
+    "trial_amplitude_fraction": {"type": "number"}, "amplitude_fraction": _NUM,
+    "type": {"enum": ["amplitude", "frequency", "mixed", "none"]}, "balance": {"type": "number"},
+    "profile_scatter": _NUM, "harmonics": {"type": "integer"}}}
+_SIDEBAND_FIT = {
+    "type": ["object", "null"],
+    "description": "a claimed fluctuation whose sidebands read another modulation type than the measurement's: "
+                   "its refit on the sidebands (compare.sideband_fit): the measured and model types, the "
+                   "refined and the claimed frequency, one entry per trial (effect x motor inertia: amplitude "
+                   "from the sideband profile's median, its scatter, its type), the chosen trial, the errors "
+                   "before and after, kept; set on the claim it produced (kept) or on the claim it left; null: "
+                   "not run",
+    "required": ["measured_type", "model_type", "frequency_hz", "trials", "kept"],
+    "properties": {"measured_type": {"type": "string"}, "model_type": {"type": "string"},
+                   "frequency_hz": {"type": "number"}, "claimed_frequency_hz": {"type": "number"},
+                   "error_before_db": {"type": "number"}, "error_after_db": {"type": "number"},
+                   "trials": {"type": "array", "items": _TRIAL}, "kept": {"type": "boolean"},
+                   "chosen": {"type": "object"}, "elapsed_s": {"type": "number"}}}
+
 SCHEMA = {
     "$schema": "https://json-schema.org/draft/2020-12/schema",
     "$id": "gearpit.compare/2",
@@ -164,6 +184,7 @@ SCHEMA = {
                                                             "over their means, what a rig's encoder or torque meter "
                                                             "would show (the fitted amplitude_fraction is the "
                                                             "drive's, before the drive train); empty otherwise"},
+                                                        "sideband_fit": _SIDEBAND_FIT,
                                                         "realisation_scatter_db": {
                                                             "type": ["number", "null"],
                                                             "description": "1-sigma of the error over "

@@ -38,6 +38,7 @@ from compare.measurement import load_measurement
 from compare.model import ComparisonModel, parse_add
 from compare.response import attach_responses
 from compare.report import document, write_html, write_json
+from compare.sideband_fit import sideband_fit_message
 from datagen.effects import EffectSpec, get, load_plugin
 
 
@@ -144,6 +145,8 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
     if att is not None and att.claimed and att.claimed[0].joint_refit is not None:
         top = att.claimed[0]
         messages.append(joint_refit_message(top.effect, top.joint_refit, top.params, top.nuisance))
+    if att is not None and att.claimed and att.claimed[0].sideband_fit is not None:
+        messages.append(sideband_fit_message(att.claimed[0].effect, att.claimed[0].sideband_fit))
     res = comparison.evaluation.residuals
     if att is not None and not att.claimed and within_noise(res.excess_total_db, res.noise_total_db,
                                                             settings or AttributionSettings()):
