@@ -24,13 +24,14 @@ _SIDEBAND_FIT = {
     "type": ["object", "null"],
     "description": "a claimed fluctuation whose sidebands read another modulation type than the measurement's: "
                    "its refit on the sidebands (compare.sideband_fit): the measured and model types, the "
-                   "refined and the claimed frequency, one entry per trial (effect x motor inertia: amplitude "
+                   "refined and the claimed frequency, the claim before, one entry per trial (effect x motor inertia: amplitude "
                    "from the sideband profile's median, its scatter, its type), the chosen trial, the errors "
                    "before and after, kept; set on the claim it produced (kept) or on the claim it left; null: "
                    "not run",
     "required": ["measured_type", "model_type", "frequency_hz", "trials", "kept"],
     "properties": {"measured_type": {"type": "string"}, "model_type": {"type": "string"},
                    "frequency_hz": {"type": "number"}, "claimed_frequency_hz": {"type": "number"},
+                   "claimed_before": {"type": "string"},
                    "error_before_db": {"type": "number"}, "error_after_db": {"type": "number"},
                    "trials": {"type": "array", "items": _TRIAL}, "kept": {"type": "boolean"},
                    "chosen": {"type": "object"}, "elapsed_s": {"type": "number"}}}

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from compare.candidates import Attribution, CandidateResult
-from compare.sideband_fit import profile_match, refine_frequency, refit_on_sidebands, sideband_ratios
+from compare.sideband_fit import (profile_match, refine_frequency, refit_on_sidebands, sideband_fit_message,
+                                  sideband_ratios)
 
 FS, FM, FSB = 20000.0, 483.3, 37.0
 
@@ -43,7 +44,8 @@ def test_the_profile_gives_the_amplitude_and_tells_the_kind_of_motion():
     """``d_k = ln(r_k measured / r_k model)``: a model with half the amplitude modulation has median ln 2 and no
     scatter (AM sidebands are m/2 of the carrier at every harmonic); a phase modulation whose first harmonic
     matches grows with k (beta k), so against the AM measurement its scatter is large (ln k, k = 1..8,
-    has the MAD 0.43 about its median; asserted > 0.35, against < 0.01 for the right kind). Source: Randall 2011, 3.6.2 (sideband levels of AM and FM)."""
+    has the MAD 0.43 about its median; asserted > 0.35, against < 0.01 for the right kind).
+    Source: Randall 2011, 3.6.2 (sideband levels of AM and FM)."""
     t = np.arange(int(FS)) / FS
     measured = sideband_ratios(tones(t, am=0.2), FS, FM, FSB)
     med, mad, n = profile_match(measured, tones(t, am=0.1, seed=1), FS, FM, FSB)
@@ -104,6 +106,8 @@ def test_a_load_swing_of_the_independent_simulator_becomes_a_torque_fluctuation_
     m = foreign_measurement(ForeignRig(seed=5, duration_s=2.0, torque_fluctuation=(0.2, 37.0)))
     rec, top = _load_swing_check(m, _attribution(36.45, 0.0143, 36.95, 0.0169), 0.2, 37.0)
     assert top.nuisance["motor_inertia_kg_m2"] > 0.01          # the default cannot hold the speed at 37 Hz
+    assert 0 < top.sigma["amplitude_fraction"] < 0.2 * top.params["amplitude_fraction"], top.sigma
+    assert "the claim (speed_fluctuation) is now torque_fluctuation" in sideband_fit_message(top.effect, rec)
     speed_rows = [r for r in rec["trials"] if r["effect"] == "speed_fluctuation"]
     assert speed_rows and all(r["type"] == "frequency" for r in speed_rows)     # no speed swing reads as AM
 
