@@ -76,6 +76,8 @@ import time
 
 import numpy as np
 
+from compare.modulation import MAX_HARMONIC
+
 #: motor inertia trials, as multiples of the model's own (the first is the model as it is)
 INERTIA_FACTORS = (1.0, 0.3, 3.0, 10.0, 30.0, 100.0)
 #: the finer ladder around the coarse trial with the least profile scatter: that inertia times 10^(s/8)
@@ -106,20 +108,27 @@ def sideband_ratios(x, fs_hz: float, mesh_hz: float, f_s_hz: float) -> dict:
 
 def refine_frequency(x, fs_hz: float, mesh_hz: float, f_s_hz: float, *, points: int = FREQUENCY_POINTS) -> float:
     """The fluctuation frequency at which the sidebands of ``x`` peak, within one DFT bin (``fs / n``) of
-    ``f_s_hz``: the maximum over a grid of ``sum_k (|U_k| + |L_k|) / |C_k|`` (the harmonics read at ``f_s_hz``),
-    refined by the parabola through the best grid point and its neighbours; ``f_s_hz`` when none is read."""
-    from compare.modulation import read_harmonics, sideband_lines
+    ``f_s_hz``: the maximum over a grid of ``sum_k (|U_k| + |L_k|) / |C_k|`` over the mesh harmonics whose carrier
+    stands out (at least :data:`compare.modulation.MIN_CARRIER_FRACTION` of the strongest; not the sidebands'
+    threshold, which a weak modulation read off its frequency may miss: a 5 % load swing read 0.4 Hz off with
+    0.5 Hz bins had sidebands of 1.5 % of their carriers), refined by the parabola through the best grid point and
+    its neighbours; ``f_s_hz`` when no carrier stands out."""
+    from compare.modulation import MIN_CARRIER_FRACTION
     from features.spectra import line_phasors
 
     x = np.asarray(x, dtype=float)
     x = x - x.mean()
-    ks = read_harmonics(sideband_lines(x, fs_hz, mesh_hz, f_s_hz))
-    if not ks:
-        return float(f_s_hz)
     grid = f_s_hz + np.linspace(-1.0, 1.0, points) * fs_hz / x.size
     grid = grid[grid > 0]
-    ks = [k for k in ks if k * mesh_hz + grid.max() < 0.5 * fs_hz and k * mesh_hz - grid.max() > 0]
+    ks = [k for k in range(1, MAX_HARMONIC + 1)
+          if k * mesh_hz + grid.max() < 0.5 * fs_hz and k * mesh_hz - grid.max() > 0]
+    if grid.size < 3 or not ks:
+        return float(f_s_hz)
     carriers = np.abs(line_phasors(x, fs_hz, [k * mesh_hz for k in ks]))
+    keep = carriers >= MIN_CARRIER_FRACTION * carriers.max()
+    ks, carriers = [k for k, on in zip(ks, keep) if on], carriers[keep]
+    if not ks or carriers.max() == 0:
+        return float(f_s_hz)
     z = np.abs(line_phasors(x, fs_hz, [k * mesh_hz + s * g for g in grid for k in ks for s in (1, -1)]))
     score = (z.reshape(grid.size, len(ks), 2).sum(axis=2) / carriers).sum(axis=1)
     i = int(np.argmax(score))
