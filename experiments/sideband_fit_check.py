@@ -131,10 +131,11 @@ def main(argv=None) -> int:
     for r in rows:
         err = (f"{r['error_before_db']:.2f} -> {r['error_after_db']:.2f}" if r["error_after_db"] is not None else
                "-")
+        inertia = f"{r['motor_inertia_kg_m2']:.3g} kg m^2" if r["motor_inertia_kg_m2"] else "-"
         verdict = {True: "yes", False: "no", None: "not refitted (no trial reads the measured type)"}[r["pass"]]
         print(f"| {r['case']} | {r['claim']} | {r['frequency_hz']:.2f} ({r['true_hz']:g}) Hz | "
               f"{100 * r['force_fraction']:.1f} ({100 * r['true_force_fraction']:g}) % | "
-              f"{100 * r['speed_fraction']:.2f} % | {f"{r['motor_inertia_kg_m2']:.3g} kg m^2" if r['motor_inertia_kg_m2'] else '-'} | {err} | {verdict} |")
+              f"{100 * r['speed_fraction']:.2f} % | {inertia} | {err} | {verdict} |")
     print(json.dumps({"passed": sum(r["pass"] is True for r in rows), "not_refitted": sum(r["pass"] is None
                                                                                          for r in rows),
                       "of": len(rows), "rows": rows}, default=str))
