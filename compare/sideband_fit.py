@@ -29,7 +29,14 @@ refitted on the sidebands:
    least profile scatter (step 2), its inertia times ``10^(s/8)``, ``s`` in :data:`LOCAL_STEPS`: near the motor's
    torsional mode the type changes within a factor 1.3 of inertia (measured on gearpit's own rig with
    0.15 kg m^2 and a load swing at 31 Hz: the model's sidebands read amplitude modulation only from 0.13 to
-   0.18 kg m^2, the least scatter at 0.18; the coarse ladder's 0.1 and 0.3 read "mixed");
+   0.18 kg m^2, the least scatter at 0.18; the coarse ladder's 0.1 and 0.3 read "mixed"). When no trial reads
+   the measured type, the kind with the least scatter is tried again on inertia x input-shaft stiffness (the
+   model's times :data:`SHAFT_FACTORS`, within :data:`SHAFT_BOUNDS_NM_PER_RAD`): a load swing winds the input
+   shaft up, and that swing of the pinion's angle modulates the mesh frequency whatever the motor's inertia
+   (measured on the foreign 23/61 pair at 1500 rpm, 80 N m, a 20 % swing at 19 Hz: with the default 5e3 N m/rad,
+   16 N m of swing wind it by 3.2 mrad, a phase modulation of 0.074 rad per mesh harmonic, and no inertia reads
+   amplitude modulation; with 1.5e4 N m/rad and 1 kg m^2 the sidebands read amplitude modulation and the mesh
+   force swings by 20.1 %, as the rig's);
 2. for each trial, the *sideband profile*: ``r_k = (|U_k| + |L_k|) / |C_k|`` per mesh harmonic ``k`` in the
    measurement and in the trial, over the harmonics whose sidebands stand out in the measurement
    (:func:`compare.modulation.read_harmonics`). ``r_k`` is free of the sensor gain and of the path (carrier and
@@ -60,7 +67,7 @@ whose mesh force swings by 20.1 % (truth 20 %) with the pinion speed held (0.09 
 
 Cost: two batches of ``2 x len(INERTIA_FACTORS)`` and two of ``len(LOCAL_STEPS)`` time-stepped simulations and
 two or three comparisons, only when a claimed fluctuation's sidebands disagree in type: 9-23 s for a 2 s record
-on 2 cores.
+on 2 cores; with the shaft stage (``len(SHAFT_FACTORS) x len(INERTIA_FACTORS)`` more trials, twice) about 60 s.
 
 References
 ----------
@@ -82,6 +89,11 @@ from compare.modulation import MAX_HARMONIC
 INERTIA_FACTORS = (1.0, 0.3, 3.0, 10.0, 30.0, 100.0)
 #: the finer ladder around the coarse trial with the least profile scatter: that inertia times 10^(s/8)
 LOCAL_STEPS = (-3, -2, -1, 1, 2, 3)
+#: input-shaft stiffness trials (with every inertia) when no inertia alone reads the measured type, as multiples
+#: of the model's own, and their range (N m/rad): a long slender shaft with a soft coupling to a short stiff one
+#: with a rigid coupling
+SHAFT_FACTORS = (3.0, 10.0, 30.0)
+SHAFT_BOUNDS_NM_PER_RAD = (1e3, 2e5)
 #: the range of motor (plus coupling and flywheel) inertia tried, kg m^2: from a 1 kW motor's rotor to a rig's
 #: flywheel
 INERTIA_BOUNDS_KG_M2 = (2e-3, 1.0)
@@ -162,10 +174,11 @@ def profile_match(measured: dict, x_model, fs_hz: float, mesh_hz: float, f_s_hz:
     return med, float(np.median(np.abs(d - med))), len(d)
 
 
-def _model_inertia(model) -> float:
+def _drive_value(model, name: str) -> float:
+    """The model's drive-train field ``name`` (its ``[drivetrain]`` value, else the default)."""
     from datagen.lumped_model import DriveTrain
 
-    return float(model.tables.get("drivetrain", {}).get("motor_inertia_kg_m2", DriveTrain().motor_inertia_kg_m2))
+    return float(model.tables.get("drivetrain", {}).get(name, getattr(DriveTrain(), name)))
 
 
 def _effect(name: str, params: dict, f_hz: float, amplitude: float):
@@ -214,31 +227,37 @@ def refit_on_sidebands(ref, comparison, attribution, *, seed: int = 0) -> dict |
     kinds = [c for c in attribution.candidates if c.status == "fitted" and acts_on_operating_point(c.effect)
              and "amplitude_fraction" in c.params]
     fit = _SidebandFit(ref, comparison.model, mesh_hz, f, sideband_ratios(ref.x, m.fs_hz, mesh_hz, f), seed)
-    trials = [(c, j) for c in kinds for j in _inertias(_model_inertia(current))]
+    j0, k0 = _drive_value(current, "motor_inertia_kg_m2"), _drive_value(current, "input_shaft_nm_per_rad")
+    inertias = _ladder(j0, INERTIA_FACTORS, INERTIA_BOUNDS_KG_M2)
+    trials = [(c, {"motor_inertia_kg_m2": j}) for c in kinds for j in inertias]
     rows = fit.trials(trials)
-    # around the trial with the least scatter, whatever its type, a finer ladder (module docstring, step 1)
-    c_b, j_b = trials[min(range(len(rows)), key=lambda i: rows[i]["profile_scatter"])]
-    lo_j, hi_j = INERTIA_BOUNDS_KG_M2
-    near = {min(max(j_b * 10 ** (s / 8), lo_j), hi_j) for s in LOCAL_STEPS} - {j for c, j in trials if c is c_b}
-    local = [(c_b, j) for j in sorted(near)]
-    rows, trials = rows + fit.trials(local), trials + local
+    trials, rows = fit.refine(trials, rows)
+    if not _matching(rows, trials, measured_type):
+        # no inertia makes the measured type: the input shaft's windup may be what modulates the frequency
+        # (module docstring, step 1); the kind with the least scatter, on inertia x shaft stiffness
+        c_b = trials[min(range(len(rows)), key=lambda i: rows[i]["profile_scatter"])][0]
+        more = [(c_b, {"motor_inertia_kg_m2": j, "input_shaft_nm_per_rad": k})
+                for k in _ladder(k0, SHAFT_FACTORS, SHAFT_BOUNDS_NM_PER_RAD) if k != k0
+                for j in inertias]
+        more_rows = fit.trials(more)
+        more, more_rows = fit.refine(more, more_rows)
+        trials, rows = trials + more, rows + more_rows
     record = {"measured_type": measured_type, "model_type": now_type, "frequency_hz": float(f),
               "claimed_before": cand.effect,
               "claimed_frequency_hz": float(f_claimed),
               "error_before_db": float(c_now.evaluation.residuals.excess_total_db), "trials": rows, "kept": False}
-    matching = [(r, c) for r, (c, _) in zip(rows, trials)
-                if r["type"] == measured_type and math.isfinite(r["amplitude_fraction"])]
+    matching = _matching(rows, trials, measured_type)
     if matching:
-        best, bc = min(matching, key=lambda rc: rc[0]["profile_scatter"])
-        a, j, c_new = fit.final(bc, best["motor_inertia_kg_m2"], best["amplitude_fraction"])
+        best, (bc, drive) = min(matching, key=lambda rt: rt[0]["profile_scatter"])
+        a, c_new = fit.final(bc, drive, best["amplitude_fraction"])
         new_type = modulation_type(c_new.model_signal, m.fs_hz, mesh_hz, f)["type"]
         new_db = float(c_new.evaluation.residuals.excess_total_db)
         kept = new_db <= (1.0 + ERROR_TOLERANCE) * record["error_before_db"]
-        record.update({"chosen": {"effect": bc.effect, "motor_inertia_kg_m2": j, "amplitude_fraction": a,
-                                  "type": new_type}, "error_after_db": new_db, "kept": bool(kept)})
+        record.update({"chosen": {"effect": bc.effect, **drive, "amplitude_fraction": a, "type": new_type},
+                       "error_after_db": new_db, "kept": bool(kept)})
         if kept:
             _adopt(attribution, bc, comparison, c_new, {"frequency_hz": float(f), "order": 0.0,
-                                                        "amplitude_fraction": a}, j, {c.effect for c in kinds})
+                                                        "amplitude_fraction": a}, drive, {c.effect for c in kinds})
             # the median of n log ratios with the profile's MAD: sigma = 1.4826 MAD sqrt(pi / 2) / sqrt(n)
             bc.sigma = {**bc.sigma, "amplitude_fraction": a * 1.858 * best["profile_scatter"]
                         / math.sqrt(max(best["harmonics"], 1))}
@@ -249,11 +268,16 @@ def refit_on_sidebands(ref, comparison, attribution, *, seed: int = 0) -> dict |
     return record
 
 
-def _inertias(j0: float) -> list:
-    """The motor inertias tried: ``j0`` times :data:`INERTIA_FACTORS` within :data:`INERTIA_BOUNDS_KG_M2`, the
-    model's own first, then by distance from it."""
-    lo, hi = INERTIA_BOUNDS_KG_M2
-    return sorted({min(max(j0 * q, lo), hi) for q in INERTIA_FACTORS}, key=lambda j: abs(math.log(j / j0)))
+def _ladder(x0: float, factors: tuple, bounds: tuple) -> list:
+    """``x0`` times ``factors`` within ``bounds``, the model's own value first, then by distance from it."""
+    lo, hi = bounds
+    return sorted({min(max(x0 * q, lo), hi) for q in factors}, key=lambda x: abs(math.log(x / x0)))
+
+
+def _matching(rows: list, trials: list, measured_type: str) -> list:
+    """``(row, trial)`` of the trials whose sidebands read ``measured_type`` with an amplitude read."""
+    return [(r, t) for r, t in zip(rows, trials)
+            if r["type"] == measured_type and math.isfinite(r["amplitude_fraction"])]
 
 
 class _SidebandFit:
@@ -262,34 +286,50 @@ class _SidebandFit:
     def __init__(self, ref, model, mesh_hz: float, f_hz: float, measured: dict, seed: int):
         self.ref, self.model, self.mesh_hz, self.f, self.measured, self.seed = ref, model, mesh_hz, f_hz, measured, seed
 
-    def with_trial(self, cand, inertia: float, amplitude: float):
-        return (self.model.with_drivetrain({**(cand.nuisance or {}), "motor_inertia_kg_m2": inertia})
+    def with_trial(self, cand, drive: dict, amplitude: float):
+        return (self.model.with_drivetrain({**(cand.nuisance or {}), **drive})
                 .with_effect(_effect(cand.effect, cand.params, self.f, amplitude)))
 
     def match(self, y) -> tuple[float, float, int]:
         return profile_match(self.measured, y, self.ref.measurement.fs_hz, self.mesh_hz, self.f)
 
     def trials(self, trials: list) -> list:
-        """One row per ``(candidate, inertia)``: stage 1 simulates each at the candidate's amplitude and scales it
-        by the profile's median; stage 2 simulates each at that amplitude (at the claim's amplitude a weak
-        trial's sidebands may not stand out) and reads its type and profile scatter."""
+        """One row per ``(candidate, drive-train values)``: stage 1 simulates each at the candidate's amplitude and
+        scales it by the profile's median; stage 2 simulates each at that amplitude (at the claim's amplitude a
+        weak trial's sidebands may not stand out) and reads its type and profile scatter."""
         from compare.comparison import simulate_model
         from compare.modulation import modulation_type
 
+        if not trials:
+            return []
         ys = simulate_model(self.ref, self.model, seed=self.seed,
-                            models=[self.with_trial(c, j, c.params["amplitude_fraction"]) for c, j in trials])
+                            models=[self.with_trial(c, d, c.params["amplitude_fraction"]) for c, d in trials])
         amps = [self.scaled(c.effect, c.params["amplitude_fraction"], self.match(y)[0])
                 for (c, _), y in zip(trials, ys)]
         ys = simulate_model(self.ref, self.model, seed=self.seed,
-                            models=[self.with_trial(c, j, a) for (c, j), a in zip(trials, amps)])
+                            models=[self.with_trial(c, d, a) for (c, d), a in zip(trials, amps)])
         rows = []
-        for (c, j), a, y in zip(trials, amps, ys):
+        for (c, d), a, y in zip(trials, amps, ys):
             med, mad, n = self.match(y)
             kind = modulation_type(y, self.ref.measurement.fs_hz, self.mesh_hz, self.f)
-            rows.append({"effect": c.effect, "motor_inertia_kg_m2": float(j), "trial_amplitude_fraction": a,
+            rows.append({"effect": c.effect, **{k: float(v) for k, v in d.items()}, "trial_amplitude_fraction": a,
                          "type": kind["type"], "balance": kind["balance"], "profile_scatter": mad, "harmonics": n,
                          "amplitude_fraction": self.scaled(c.effect, a, med) if math.isfinite(med) else math.nan})
         return rows
+
+    def refine(self, trials: list, rows: list) -> tuple[list, list]:
+        """Add, around the trial with the least scatter whatever its type, its motor inertia times ``10^(s/8)``
+        (``s`` in :data:`LOCAL_STEPS`, its other drive-train values held; module docstring, step 1)."""
+        if not rows:
+            return trials, rows
+        c_b, d_b = trials[min(range(len(rows)), key=lambda i: rows[i]["profile_scatter"])]
+        lo, hi = INERTIA_BOUNDS_KG_M2
+        j_b = d_b["motor_inertia_kg_m2"]
+        seen = {tuple(sorted(d.items())) for c, d in trials if c is c_b}
+        near = sorted({min(max(j_b * 10 ** (s / 8), lo), hi) for s in LOCAL_STEPS})
+        local = [(c_b, {**d_b, "motor_inertia_kg_m2": j}) for j in near
+                 if tuple(sorted({**d_b, "motor_inertia_kg_m2": j}.items())) not in seen]
+        return trials + local, rows + self.trials(local)
 
     @staticmethod
     def scaled(effect: str, a: float, med: float) -> float:
@@ -299,31 +339,31 @@ class _SidebandFit:
         lo, hi = _amplitude_bounds(effect)
         return float(min(max(a * math.exp(med), lo), hi))
 
-    def final(self, cand, inertia: float, amplitude: float):
+    def final(self, cand, drive: dict, amplitude: float):
         """Compare the chosen trial as the next comparison will; once more at the corrected amplitude when its
         profile says it is off by more than :data:`CORRECTION_FACTOR` and that lowers the error. Returns
-        ``(amplitude, inertia, comparison)``."""
+        ``(amplitude, comparison)``."""
         from compare.comparison import compare
 
         m = self.ref.measurement
-        c = compare(m, self.with_trial(cand, inertia, amplitude), seed=self.seed, reference=self.ref)
+        c = compare(m, self.with_trial(cand, drive, amplitude), seed=self.seed, reference=self.ref)
         med = self.match(c.model_signal)[0]
         if math.isfinite(med) and abs(med) > math.log(CORRECTION_FACTOR):
             a2 = self.scaled(cand.effect, amplitude, med)
-            c2 = compare(m, self.with_trial(cand, inertia, a2), seed=self.seed, reference=self.ref)
+            c2 = compare(m, self.with_trial(cand, drive, a2), seed=self.seed, reference=self.ref)
             if c2.evaluation.residuals.excess_total_db <= c.evaluation.residuals.excess_total_db:
-                return a2, float(inertia), c2
-        return float(amplitude), float(inertia), c
+                return a2, c2
+        return float(amplitude), c
 
 
-def _adopt(attribution, cand, comparison, c_new, params: dict, inertia: float, tried: set) -> None:
-    """Make ``cand`` the claim at ``params`` and the motor ``inertia``, with the errors of ``c_new``; the
-    fluctuations ``tried`` lost on the sidebands and are no longer rivals."""
+def _adopt(attribution, cand, comparison, c_new, params: dict, drive: dict, tried: set) -> None:
+    """Make ``cand`` the claim at ``params`` and the drive-train values ``drive``, with the errors of ``c_new``;
+    the fluctuations ``tried`` lost on the sidebands and are no longer rivals."""
     from compare.fitting import explained_keys
 
     r = c_new.evaluation.residuals
     cand.params = {**cand.params, **params}
-    cand.nuisance = {**(cand.nuisance or {}), "motor_inertia_kg_m2": float(inertia)}
+    cand.nuisance = {**(cand.nuisance or {}), **{k: float(v) for k, v in drive.items()}}
     cand.raw_error_db = float(r.total_db)
     cand.view_error_db = dict(r.excess_view_db)
     cand.error_db = cand.model_error_db = float(r.excess_total_db)
@@ -347,8 +387,10 @@ def sideband_fit_message(effect: str, record: dict) -> str:
     ch = record.get("chosen")
     if not ch:
         return head + "; no trial of the drive train reads the measured type, the claim is kept"
+    shaft = (f" and the input shaft {ch['input_shaft_nm_per_rad']:.3g} N m/rad" if "input_shaft_nm_per_rad" in ch
+             else "")
     what = (f"{ch['effect']} {100 * ch['amplitude_fraction']:.3g} % with the motor inertia "
-            f"{ch['motor_inertia_kg_m2']:.3g} kg m^2 ({ch['type']} modulation, error "
+            f"{ch['motor_inertia_kg_m2']:.3g} kg m^2{shaft} ({ch['type']} modulation, error "
             f"{record['error_before_db']:.2f} -> {record['error_after_db']:.2f} dB)")
     if record["kept"]:
         before = record.get("claimed_before", effect)
