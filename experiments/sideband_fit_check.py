@@ -109,6 +109,7 @@ def run_case(name: str) -> dict:
            "force_fraction": force, "true_force_fraction": amp, "ratio": ratio,
            "speed_fraction": resp["speed_pinion_amplitude_fraction"],
            "motor_inertia_kg_m2": top.nuisance.get("motor_inertia_kg_m2"),
+           "input_shaft_nm_per_rad": top.nuisance.get("input_shaft_nm_per_rad"),
            "kept": bool(rec and rec["kept"]), "message": sideband_fit_message(top.effect, rec) if rec else "not run",
            "error_before_db": rec["error_before_db"] if rec else None,
            "error_after_db": rec.get("error_after_db") if rec else None}
@@ -125,13 +126,15 @@ def main(argv=None) -> int:
     for name in args.only or list(CASES):
         rows.append(run_case(name))
         print(f"{name}: {rows[-1]['message']} ({rows[-1]['seconds']:.0f} s)", flush=True)
-    print("| case | claim after | frequency (true) | mesh force swing (true) | pinion speed swing | motor inertia | "
+    print("| case | claim after | frequency (true) | mesh force swing (true) | pinion speed swing | drive train fitted | "
           "error before -> after (dB) | pass |")
     print("|---|---|---|---|---|---|---|---|")
     for r in rows:
         err = (f"{r['error_before_db']:.2f} -> {r['error_after_db']:.2f}" if r["error_after_db"] is not None else
                "-")
         inertia = f"{r['motor_inertia_kg_m2']:.3g} kg m^2" if r["motor_inertia_kg_m2"] else "-"
+        if r["input_shaft_nm_per_rad"]:
+            inertia += f", input shaft {r['input_shaft_nm_per_rad']:.3g} N m/rad"
         verdict = {True: "yes", False: "no", None: "not refitted (no trial reads the measured type)"}[r["pass"]]
         print(f"| {r['case']} | {r['claim']} | {r['frequency_hz']:.2f} ({r['true_hz']:g}) Hz | "
               f"{100 * r['force_fraction']:.1f} ({100 * r['true_force_fraction']:g}) % | "
