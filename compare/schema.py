@@ -34,7 +34,10 @@ _SIDEBAND_FIT = {
                    "claimed_before": {"type": "string"},
                    "error_before_db": {"type": "number"}, "error_after_db": {"type": "number"},
                    "trials": {"type": "array", "items": _TRIAL}, "kept": {"type": "boolean"},
-                   "chosen": {"type": "object"}, "elapsed_s": {"type": "number"}}}
+                   "chosen": {"type": "object", "description": "the trial compared: effect, its drive-train "
+                              "values, amplitude_fraction, the comparison's type, at_bound (drive-train values "
+                              "on the ladder's bounds)"},
+                   "elapsed_s": {"type": "number"}}}
 
 SCHEMA = {
     "$schema": "https://json-schema.org/draft/2020-12/schema",

@@ -253,8 +253,10 @@ def refit_on_sidebands(ref, comparison, attribution, *, seed: int = 0) -> dict |
         new_type = modulation_type(c_new.model_signal, m.fs_hz, mesh_hz, f)["type"]
         new_db = float(c_new.evaluation.residuals.excess_total_db)
         kept = new_db <= (1.0 + ERROR_TOLERANCE) * record["error_before_db"]
-        record.update({"chosen": {"effect": bc.effect, **drive, "amplitude_fraction": a, "type": new_type},
-                       "error_after_db": new_db, "kept": bool(kept)})
+        bounds = {"motor_inertia_kg_m2": INERTIA_BOUNDS_KG_M2, "input_shaft_nm_per_rad": SHAFT_BOUNDS_NM_PER_RAD}
+        at_bound = [k for k, v in drive.items() if any(math.isclose(v, b, rel_tol=1e-9) for b in bounds[k])]
+        record.update({"chosen": {"effect": bc.effect, **drive, "amplitude_fraction": a, "type": new_type,
+                                  "at_bound": at_bound}, "error_after_db": new_db, "kept": bool(kept)})
         if kept:
             _adopt(attribution, bc, comparison, c_new, {"frequency_hz": float(f), "order": 0.0,
                                                         "amplitude_fraction": a}, drive, {c.effect for c in kinds})
@@ -389,9 +391,11 @@ def sideband_fit_message(effect: str, record: dict) -> str:
         return head + "; no trial of the drive train reads the measured type, the claim is kept"
     shaft = (f" and the input shaft {ch['input_shaft_nm_per_rad']:.3g} N m/rad" if "input_shaft_nm_per_rad" in ch
              else "")
+    bound = ("; " + ", ".join(ch["at_bound"]) + " on the ladder's bound, the rig's may lie beyond it"
+             if ch.get("at_bound") else "")
     what = (f"{ch['effect']} {100 * ch['amplitude_fraction']:.3g} % with the motor inertia "
             f"{ch['motor_inertia_kg_m2']:.3g} kg m^2{shaft} ({ch['type']} modulation, error "
-            f"{record['error_before_db']:.2f} -> {record['error_after_db']:.2f} dB)")
+            f"{record['error_before_db']:.2f} -> {record['error_after_db']:.2f} dB{bound})")
     if record["kept"]:
         before = record.get("claimed_before", effect)
         return head + f"; refitted on the sidebands' profile: the claim ({before}) is now {what}"

@@ -178,3 +178,6 @@ def test_a_load_swing_that_only_a_stiffer_input_shaft_holds_is_found_on_inertia_
     assert row["kept"] and row["claim"] == "torque_fluctuation", row["message"]
     assert row["ratio"] <= 1.5 and row["speed_fraction"] < 0.003, row
     assert "input shaft" in row["message"]
+    # measured: 1 kg m^2, the ladder's upper bound, which the line must say
+    on_bound = math.isclose(row["motor_inertia_kg_m2"], 1.0) or math.isclose(row["motor_inertia_kg_m2"], 2e-3)
+    assert ("motor_inertia_kg_m2 on the ladder's bound" in row["message"]) == on_bound
