@@ -185,8 +185,12 @@ def _effect(name: str, params: dict, f_hz: float, amplitude: float):
     """Effect ``name`` with ``params`` at the fluctuation frequency ``f_hz`` (in Hz, order 0) and ``amplitude``."""
     from datagen.effects import EffectSpec
 
+    from datagen.effects import get
+
     p = {k: v for k, v in params.items() if k not in ("frequency_hz", "order", "amplitude_fraction")}
-    return EffectSpec.from_dict({"name": name, **p, "frequency_hz": float(f_hz), "order": 0.0,
+    if "order" in getattr(get(name), "__dataclass_fields__", {}):      # a plugin's fluctuation may have no order
+        p["order"] = 0.0
+    return EffectSpec.from_dict({"name": name, **p, "frequency_hz": float(f_hz),
                                  "amplitude_fraction": float(amplitude)}).build()
 
 
@@ -258,8 +262,8 @@ def refit_on_sidebands(ref, comparison, attribution, *, seed: int = 0) -> dict |
         record.update({"chosen": {"effect": bc.effect, **drive, "amplitude_fraction": a, "type": new_type,
                                   "at_bound": at_bound}, "error_after_db": new_db, "kept": bool(kept)})
         if kept:
-            _adopt(attribution, bc, comparison, c_new, {"frequency_hz": float(f), "order": 0.0,
-                                                        "amplitude_fraction": a}, drive, {c.effect for c in kinds})
+            _adopt(attribution, bc, comparison, c_new, _effect(bc.effect, bc.params, f, a).params(), drive,
+                   {c.effect for c in kinds})
             # the median of n log ratios with the profile's MAD: sigma = 1.4826 MAD sqrt(pi / 2) / sqrt(n)
             bc.sigma = {**bc.sigma, "amplitude_fraction": a * 1.858 * best["profile_scatter"]
                         / math.sqrt(max(best["harmonics"], 1))}

@@ -181,3 +181,36 @@ def test_a_load_swing_that_only_a_stiffer_input_shaft_holds_is_found_on_inertia_
     # measured: 1 kg m^2, the ladder's upper bound, which the line must say
     on_bound = math.isclose(row["motor_inertia_kg_m2"], 1.0) or math.isclose(row["motor_inertia_kg_m2"], 2e-3)
     assert ("motor_inertia_kg_m2 on the ladder's bound" in row["message"]) == on_bound
+
+
+def test_a_plugin_fluctuation_without_an_order_field_is_tried_too():
+    """A user's fluctuation plugin (hook 5, frequency_hz and amplitude_fraction, no ``order``) is a trial like the
+    registry's: its effect is built at the trial's frequency and amplitude (the first version passed ``order``
+    to every effect, which such a plugin refuses)."""
+    from dataclasses import dataclass, field
+
+    from compare.response import acts_on_operating_point
+    from compare.sideband_fit import _effect
+    from datagen.effects.base import Effect, register
+    from datagen.effects.registry import unregister
+
+    @register
+    @dataclass(frozen=True)
+    class BrakeRipple(Effect):
+        name = "brake_ripple_test"
+        signature = "load ripple"
+        frequency_hz: float = field(default=10.0, metadata={"unit": "Hz", "bounds": (0.0, 1000.0)})
+        amplitude_fraction: float = field(default=0.01, metadata={"unit": "-", "bounds": (0.0, 0.5)})
+
+        def operating_point(self, t_s, speed_rpm, torque_nm, ctx):
+            return speed_rpm, np.asarray(torque_nm, dtype=float) * (
+                1 + self.amplitude_fraction * np.sin(2 * np.pi * self.frequency_hz * np.asarray(t_s)))
+
+    try:
+        assert acts_on_operating_point("brake_ripple_test")
+        e = _effect("brake_ripple_test", {"frequency_hz": 3.0, "amplitude_fraction": 0.2}, 37.0, 0.12)
+        assert (e.frequency_hz, e.amplitude_fraction) == (37.0, 0.12)
+        t = _effect("torque_fluctuation", {"frequency_hz": 3.0, "order": 2.0, "amplitude_fraction": 0.2}, 37.0, 0.12)
+        assert (t.frequency_hz, t.order, t.amplitude_fraction) == (37.0, 0.0, 0.12)
+    finally:
+        unregister("brake_ripple_test")
