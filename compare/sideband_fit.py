@@ -230,22 +230,10 @@ def refit_on_sidebands(ref, comparison, attribution, *, seed: int = 0) -> dict |
         return None
     kinds = [c for c in attribution.candidates if c.status == "fitted" and acts_on_operating_point(c.effect)
              and "amplitude_fraction" in c.params]
+    if not kinds:
+        return None
     fit = _SidebandFit(ref, comparison.model, mesh_hz, f, sideband_ratios(ref.x, m.fs_hz, mesh_hz, f), seed)
-    j0, k0 = _drive_value(current, "motor_inertia_kg_m2"), _drive_value(current, "input_shaft_nm_per_rad")
-    inertias = _ladder(j0, INERTIA_FACTORS, INERTIA_BOUNDS_KG_M2)
-    trials = [(c, {"motor_inertia_kg_m2": j}) for c in kinds for j in inertias]
-    rows = fit.trials(trials)
-    trials, rows = fit.refine(trials, rows)
-    if not _matching(rows, trials, measured_type):
-        # no inertia makes the measured type: the input shaft's windup may be what modulates the frequency
-        # (module docstring, step 1); the kind with the least scatter, on inertia x shaft stiffness
-        c_b = trials[min(range(len(rows)), key=lambda i: rows[i]["profile_scatter"])][0]
-        more = [(c_b, {"motor_inertia_kg_m2": j, "input_shaft_nm_per_rad": k})
-                for k in _ladder(k0, SHAFT_FACTORS, SHAFT_BOUNDS_NM_PER_RAD) if k != k0
-                for j in inertias]
-        more_rows = fit.trials(more)
-        more, more_rows = fit.refine(more, more_rows)
-        trials, rows = trials + more, rows + more_rows
+    trials, rows = _ladders(fit, kinds, current, measured_type)
     record = {"measured_type": measured_type, "model_type": now_type, "frequency_hz": float(f),
               "claimed_before": cand.effect,
               "claimed_frequency_hz": float(f_claimed),
@@ -272,6 +260,27 @@ def refit_on_sidebands(ref, comparison, attribution, *, seed: int = 0) -> dict |
                         for r in rows]
     attribution.claimed[0].sideband_fit = record
     return record
+
+
+def _ladders(fit, kinds: list, current, measured_type: str) -> tuple[list, list]:
+    """The trials and their rows (module docstring, step 1): every kind on the inertia ladder, refined around the
+    least scatter; when none reads ``measured_type``, the kind with the least scatter on inertia x input-shaft
+    stiffness, refined likewise."""
+    j0, k0 = _drive_value(current, "motor_inertia_kg_m2"), _drive_value(current, "input_shaft_nm_per_rad")
+    inertias = _ladder(j0, INERTIA_FACTORS, INERTIA_BOUNDS_KG_M2)
+    trials, rows = fit.refine(*_with_rows(fit, [(c, {"motor_inertia_kg_m2": j}) for c in kinds for j in inertias]))
+    if _matching(rows, trials, measured_type):
+        return trials, rows
+    # no inertia makes the measured type: the input shaft's windup may be what modulates the frequency
+    c_b = trials[min(range(len(rows)), key=lambda i: rows[i]["profile_scatter"])][0]
+    more = [(c_b, {"motor_inertia_kg_m2": j, "input_shaft_nm_per_rad": k})
+            for k in _ladder(k0, SHAFT_FACTORS, SHAFT_BOUNDS_NM_PER_RAD) if k != k0 for j in inertias]
+    more, more_rows = fit.refine(*_with_rows(fit, more))
+    return trials + more, rows + more_rows
+
+
+def _with_rows(fit, trials: list) -> tuple[list, list]:
+    return trials, fit.trials(trials)
 
 
 def _ladder(x0: float, factors: tuple, bounds: tuple) -> list:
