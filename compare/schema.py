@@ -162,6 +162,13 @@ SCHEMA = {
                                                                 "speed_pinion_amplitude_fraction": {"type": "number"},
                                                                 "mesh_force_amplitude_fraction": {"type": "number"},
                                                                 "reference_amplitude_fraction": {"type": "number"},
+                                                                "shaft_order": {
+                                                                    "type": ["object", "null"],
+                                                                    "description": "the shaft order the "
+                                                                    "frequency sits on within the record's "
+                                                                    "resolution (shaft, order), where a "
+                                                                    "once-per-revolution error makes the same "
+                                                                    "sidebands; null: none"},
                                                                 "modulation": {
                                                                     "type": "object",
                                                                     "description": "compare.modulation: the "

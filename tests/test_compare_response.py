@@ -158,3 +158,22 @@ def test_the_foreign_load_swing_reads_as_amplitude_and_gearpits_fluctuations_as_
     from compare.schema import SCHEMA
 
     jsonschema.validate(cands[0].to_dict(), SCHEMA["properties"]["attribution"]["properties"]["candidates"]["items"])
+
+
+def test_a_fluctuation_on_a_shaft_order_is_said_to_twin_a_once_per_revolution_error():
+    """A fitted fluctuation at a shaft's rotation frequency (1000 rpm: pinion 16.67 Hz, wheel 4.83 Hz on 29/100
+    teeth) within the record's resolution gets ``shaft_order`` and a line saying that an eccentricity or pitch
+    error of that shaft makes the same sidebands; 37 Hz (no order up to 3 of either shaft within 0.5 Hz) and a
+    frequency 1.1 resolutions off the order get none. The line without it is unchanged."""
+    from compare.response import response_text, shaft_order_of
+
+    assert shaft_order_of(16.6667, 1000.0, 29, 100, 0.5) == {"shaft": "pinion", "order": 1}
+    assert shaft_order_of(2 * 1000 / 60 * 29 / 100 + 0.3, 1000.0, 29, 100, 0.5) == {"shaft": "wheel", "order": 2}
+    assert shaft_order_of(37.0, 1000.0, 29, 100, 0.5) is None
+    assert shaft_order_of(1000 / 60 + 0.55, 1000.0, 29, 100, 0.5) is None
+    base = {"frequency_hz": 16.6667, "reference_amplitude_fraction": 0.75, "speed_pinion_amplitude_fraction": 0.01,
+            "mesh_force_amplitude_fraction": 0.2}
+    plain = response_text(base, "torque_fluctuation")
+    locked = response_text({**base, "shaft_order": {"shaft": "pinion", "order": 1}}, "torque_fluctuation")
+    assert locked.startswith(plain) and "pinion's order 1" in locked and "eccentricity" in locked
+    assert "order" not in plain.split("Hz (")[0]
