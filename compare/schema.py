@@ -17,6 +17,7 @@ _ERRORS = {"type": "object", "required": ["total"], "additionalProperties": {"ty
 
 _TRIAL = {"type": "object", "properties": {
     "effect": {"type": "string"}, "motor_inertia_kg_m2": {"type": "number"},
+    "input_shaft_nm_per_rad": {"type": "number"},
     "trial_amplitude_fraction": {"type": "number"}, "amplitude_fraction": _NUM,
     "type": {"enum": ["amplitude", "frequency", "mixed", "none"]}, "balance": {"type": "number"},
     "profile_scatter": _NUM, "harmonics": {"type": "integer"}}}
@@ -24,8 +25,9 @@ _SIDEBAND_FIT = {
     "type": ["object", "null"],
     "description": "a claimed fluctuation whose sidebands read another modulation type than the measurement's: "
                    "its refit on the sidebands (compare.sideband_fit): the measured and model types, the "
-                   "refined and the claimed frequency, the claim before, one entry per trial (effect x motor inertia: amplitude "
-                   "from the sideband profile's median, its scatter, its type), the chosen trial, the errors "
+                   "refined and the claimed frequency, the claim before, one entry per trial (effect x drive-train "
+                   "values: amplitude from the sideband profile's median, its scatter, its type), the chosen "
+                   "trial, the errors "
                    "before and after, kept; set on the claim it produced (kept) or on the claim it left; null: "
                    "not run",
     "required": ["measured_type", "model_type", "frequency_hz", "trials", "kept"],
