@@ -327,7 +327,7 @@ def _profile_nonlinear(c: CandidateResult, ev, ref: Reference, model, settings: 
     c.realisation_scatter_db = max(p.scatter_db for p in profiles)
     # the chosen fit as a comparison reads a chaotic model: the mean views of its realisations
     y, others = chaotic_realisations(ref, model, seed=settings.seed, solver=solver,
-                                     extra_effects=(EffectSpec.from_dict({"name": c.effect, **c.params}).build(),))
+                                     extra_effects=(c.build_effect(),))
     return evaluate(ref, y, ref.fs_hz, seed=settings.seed, ensemble=others).residuals, n + 1 + len(others)
 
 
@@ -388,7 +388,6 @@ def _refine_nuisances(results: list, ref: Reference, model, calibration, setting
     10.9 s in two workers (the candidates' refits, free in their effect too, cost more than the baseline's).
     """
     from compare.error import combine, excess
-    from datagen.effects import EffectSpec
 
     ranked = sorted((c for c in results if c.status == "fitted" and math.isfinite(c.raw_error_db)),
                     key=lambda c: c.raw_error_db)[:settings.refine_top]
@@ -401,7 +400,7 @@ def _refine_nuisances(results: list, ref: Reference, model, calibration, setting
     # raw errors (Calibration.error_db is raw)
     better = [null.error_db < c.raw_baseline_error_db for c in ranked]
     jobs = [_refit_args(ref, model, calibration, settings, start=null.values if b else None,
-                        effect=EffectSpec.from_dict({"name": c.effect, **c.params}).build())
+                        effect=c.build_effect())
             for c, b in zip(ranked, better)]
     if executor is not None:
         cals = [f.result() for f in [executor.submit(_refit_payload, pickle.dumps(j)) for j in jobs]]

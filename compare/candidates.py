@@ -158,6 +158,12 @@ class CandidateResult:
         self.view_error_db = excess(raw_view_db, self.noise_view_db)
         self.error_db = combine(self.view_error_db)
 
+    def build_effect(self):
+        """The fitted effect as an instance (the candidate's ``effect`` at its ``params``)."""
+        from datagen.effects import EffectSpec
+
+        return EffectSpec.from_dict({"name": self.effect, **self.params}).build()
+
     @property
     def reduction(self) -> float:
         if not (math.isfinite(self.error_db) and self.baseline_error_db > 0):

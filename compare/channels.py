@@ -67,7 +67,6 @@ def resolve_rivals(ref: Reference, model, attribution, settings, *, seed: int = 
     """Settle the claimed effect of ``attribution`` against its rivals on the measurement's further channels
     (module docstring); reorders ``attribution.candidates`` (the new claim first), moves the claim and replaces
     ``attribution.rivals``. None (and nothing changed) without rivals or further channels."""
-    from datagen.effects import EffectSpec
 
     secondary = dict(ref.measurement.secondary or {})
     claimed = next((c for c in attribution.candidates if c.claimed), None)
@@ -76,7 +75,7 @@ def resolve_rivals(ref: Reference, model, attribution, settings, *, seed: int = 
     group = [claimed] + [c for c in attribution.candidates if c.effect in attribution.rivals]
     models = [model]
     for c in group:
-        m = model.with_effect(EffectSpec.from_dict({"name": c.effect, **c.params}).build())
+        m = model.with_effect(c.build_effect())
         models.append(m.with_drivetrain(c.nuisance) if c.nuisance else m)
     sims = list(secondary.values())
     try:       # with the models' own solvers: as the comparison after adding the effect will simulate them

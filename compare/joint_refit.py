@@ -119,7 +119,7 @@ def refit_claim_jointly(ref, comparison, attribution, settings, *, parallel: boo
     from compare.fitspace import fit_space
     from compare.fitting import record_period_s
     from compare.refit import MIN_GAIN
-    from datagen.effects import EffectSpec, get
+    from datagen.effects import get
 
     cal = comparison.calibration
     claimed = attribution.claimed
@@ -131,7 +131,7 @@ def refit_claim_jointly(ref, comparison, attribution, settings, *, parallel: boo
         return None
     if any(e.is_nonlinear or e.is_nonstationary for e in comparison.model.effects):
         return None         # the model itself is time-stepped: no periodic path to search on
-    effect = EffectSpec.from_dict({"name": cand.effect, **cand.params}).build()
+    effect = cand.build_effect()
     if record_period_s(ref, comparison.model, effect) > 1.001 * 60.0 / ref.speed.speed_rpm:
         return None         # longer than a pinion revolution: too costly per sample (module docstring)
     t0 = time.perf_counter()

@@ -170,7 +170,6 @@ def attach_responses(candidates, model, pair, *, speed_rpm: float, torque_nm: fl
     point, at most ``limit`` of them in list order; returns how many were set. With the comparison's
     ``reference`` also ``response["modulation"]``: the modulation type of the sidebands at the fluctuation
     frequency in the measurement and in the model with the candidate (:mod:`compare.modulation`)."""
-    from datagen.effects import EffectSpec
 
     n = 0
     for c in candidates:
@@ -178,7 +177,7 @@ def attach_responses(candidates, model, pair, *, speed_rpm: float, torque_nm: fl
             break
         if c.status != "fitted" or not (c.reduction > 0) or not acts_on_operating_point(c.effect):
             continue
-        effect = EffectSpec.from_dict({"name": c.effect, **c.params}).build()
+        effect = c.build_effect()
         fitted = model.with_drivetrain(c.nuisance) if c.nuisance else model      # e.g. a sideband refit's inertia
         c.response = fluctuation_response(fitted, pair, effect, speed_rpm=speed_rpm, torque_nm=torque_nm)
         if reference is not None:

@@ -109,13 +109,19 @@ MODEL_FLOOR = 1e-4
 FREQUENCY_POINTS = 41
 
 
+def _ratio(line: tuple) -> float:
+    """``(|U| + |L|) / |C|`` of one harmonic's ``(C, U, L)``."""
+    c, u, lo = (abs(v) for v in line)
+    return (u + lo) / c
+
+
 def sideband_ratios(x, fs_hz: float, mesh_hz: float, f_s_hz: float) -> dict:
     """Harmonic ``k`` -> ``(|U| + |L|) / |C|`` at the harmonics whose sidebands stand out in ``x``
     (:func:`compare.modulation.read_harmonics`)."""
     from compare.modulation import read_harmonics, sideband_lines
 
     lines = sideband_lines(x, fs_hz, mesh_hz, f_s_hz)
-    return {k: (abs(lines[k][1]) + abs(lines[k][2])) / abs(lines[k][0]) for k in read_harmonics(lines)}
+    return {k: _ratio(lines[k]) for k in read_harmonics(lines)}
 
 
 def refine_frequency(x, fs_hz: float, mesh_hz: float, f_s_hz: float, *, points: int = FREQUENCY_POINTS) -> float:
@@ -166,7 +172,7 @@ def profile_match(measured: dict, x_model, fs_hz: float, mesh_hz: float, f_s_hz:
             continue
         c, u, lo = (abs(v) for v in lines[k])
         if min(u, lo) >= MODEL_FLOOR * c:
-            d.append(math.log(r / ((u + lo) / c)))
+            d.append(math.log(r / _ratio(lines[k])))
     if len(d) < 2:
         return math.nan, math.inf, len(d)
     d = np.asarray(d)
@@ -183,9 +189,7 @@ def _drive_value(model, name: str) -> float:
 
 def _effect(name: str, params: dict, f_hz: float, amplitude: float):
     """Effect ``name`` with ``params`` at the fluctuation frequency ``f_hz`` (in Hz, order 0) and ``amplitude``."""
-    from datagen.effects import EffectSpec
-
-    from datagen.effects import get
+    from datagen.effects import EffectSpec, get
 
     p = {k: v for k, v in params.items() if k not in ("frequency_hz", "order", "amplitude_fraction")}
     if "order" in getattr(get(name), "__dataclass_fields__", {}):      # a plugin's fluctuation may have no order
@@ -215,7 +219,7 @@ def refit_on_sidebands(ref, comparison, attribution, *, seed: int = 0) -> dict |
     t0 = time.perf_counter()
     cand, m = claimed[0], ref.measurement
     mesh_hz = m.pair.pinion.teeth * ref.speed.speed_rpm / 60.0
-    f_claimed = fluctuation_frequency(_claimed_effect(cand), ref.speed.speed_rpm)
+    f_claimed = fluctuation_frequency(cand.build_effect(), ref.speed.speed_rpm)
     # the sidebands' level depends steeply on reading them at the right frequency (a Hann line half a bin off
     # loses 15 %, one bin 50 %: 0.09 read for 0.2 on the foreign record, 0.55 Hz off with 0.5 Hz bins), and the
     # claim's frequency comes from the views' fit, which does not pin it that closely
@@ -224,7 +228,7 @@ def refit_on_sidebands(ref, comparison, attribution, *, seed: int = 0) -> dict |
     if measured_type not in ("amplitude", "frequency"):
         return None
     current = (comparison.model.with_drivetrain(cand.nuisance) if cand.nuisance else comparison.model)
-    c_now = compare(m, current.with_effect(_claimed_effect(cand)), seed=seed, reference=ref)
+    c_now = compare(m, current.with_effect(cand.build_effect()), seed=seed, reference=ref)
     now_type = modulation_type(c_now.model_signal, m.fs_hz, mesh_hz, f_claimed)["type"]
     if now_type == measured_type:
         return None
@@ -268,19 +272,16 @@ def _ladders(fit, kinds: list, current, measured_type: str) -> tuple[list, list]
     stiffness, refined likewise."""
     j0, k0 = _drive_value(current, "motor_inertia_kg_m2"), _drive_value(current, "input_shaft_nm_per_rad")
     inertias = _ladder(j0, INERTIA_FACTORS, INERTIA_BOUNDS_KG_M2)
-    trials, rows = fit.refine(*_with_rows(fit, [(c, {"motor_inertia_kg_m2": j}) for c in kinds for j in inertias]))
+    trials = [(c, {"motor_inertia_kg_m2": j}) for c in kinds for j in inertias]
+    trials, rows = fit.refine(trials, fit.trials(trials))
     if _matching(rows, trials, measured_type):
         return trials, rows
     # no inertia makes the measured type: the input shaft's windup may be what modulates the frequency
     c_b = trials[min(range(len(rows)), key=lambda i: rows[i]["profile_scatter"])][0]
     more = [(c_b, {"motor_inertia_kg_m2": j, "input_shaft_nm_per_rad": k})
             for k in _ladder(k0, SHAFT_FACTORS, SHAFT_BOUNDS_NM_PER_RAD) if k != k0 for j in inertias]
-    more, more_rows = fit.refine(*_with_rows(fit, more))
+    more, more_rows = fit.refine(more, fit.trials(more))
     return trials + more, rows + more_rows
-
-
-def _with_rows(fit, trials: list) -> tuple[list, list]:
-    return trials, fit.trials(trials)
 
 
 def _ladder(x0: float, factors: tuple, bounds: tuple) -> list:
@@ -387,12 +388,6 @@ def _adopt(attribution, cand, comparison, c_new, params: dict, drive: dict, trie
         c.claimed = c is cand
     attribution.candidates.sort(key=lambda c: not c.claimed)       # stable: the rest stay ranked
     attribution.rivals = [e for e in attribution.rivals if e not in tried]
-
-
-def _claimed_effect(cand):
-    from datagen.effects import EffectSpec
-
-    return EffectSpec.from_dict({"name": cand.effect, **cand.params}).build()
 
 
 def sideband_fit_message(effect: str, record: dict) -> str:

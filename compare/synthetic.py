@@ -198,9 +198,8 @@ def run_hidden_case(name: str, *, calibrate: bool | str | None = None, candidate
 def with_candidate(model, candidate):
     """``model`` with a fitted candidate effect added at its parameters, and at the nuisances it was fitted with
     when it has them (what ``gearpit compare --add`` does)."""
-    from datagen.effects import EffectSpec
 
-    out = model.with_effect(EffectSpec.from_dict({"name": candidate.effect, **candidate.params}).build())
+    out = model.with_effect(candidate.build_effect())
     return out.with_drivetrain(candidate.nuisance) if candidate.nuisance else out
 
 
