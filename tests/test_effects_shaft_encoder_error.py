@@ -38,7 +38,10 @@ def runs():
     enc = {"name": "shaft_encoder_error", "pinion_rad": A1, "wheel_rad": A2, "pinion_phase_rad": 0.3,
            "wheel_phase_rad": -1.1}
     zero = {"name": "shaft_encoder_error", "pinion_rad": 0.0, "wheel_rad": 0.0}
-    return simulate([_case(()), _case((enc,)), _case((zero,))])
+    # each case alone: in one batch a case's place can change the last bits of every channel (measured on a fresh
+    # install with numpy 2.4.6, numba 0.68.1: the third case 5e-11 of 214 m/s^2 off the first), and this test is
+    # about the effect, not the batch
+    return [simulate([_case(effects)])[0] for effects in ((), (enc,), (zero,))]
 
 
 def test_shaft_lines_of_the_transmission_error_are_rb_times_the_angle_error():
