@@ -40,6 +40,7 @@ from compare.error import effective_count
 from compare.fitspace import CHAIN_EFFECTS, bounds_hit, fit_space
 from compare.fitting import (explained_keys, frequency_ladder, prepared_case, record_period_s, search_group,
                              transient_groups, window_label, window_s)
+from compare.response import mark_shaft_locks
 from gearpit.errors import GearpitError
 
 __all__ = ["attribute", "Attribution", "AttributionSettings", "CandidateResult", "choose_claim", "rivals_of",
@@ -134,6 +135,8 @@ def attribute(ref: Reference, model, baseline_residual: np.ndarray, *, candidate
     for c in results:
         if c.params:
             c.at_bound = bounds_hit(fit_space(get(c.effect)), c.params)
+    pair = ref.measurement.pair
+    mark_shaft_locks(results, pair, speed_rpm=ref.speed.speed_rpm, resolution_hz=ref.fs_hz / ref.x.size)
     results.sort(key=lambda c: -c.reduction)
     claimed = choose_claim(results, settings)
     return Attribution(candidates=results, unexplained=unexplained_of(results, disagreements, settings), elapsed_s=time.perf_counter() - t0,

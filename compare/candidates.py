@@ -46,7 +46,8 @@ Other effects that also pass the threshold are listed as alternatives
 the claimed one are its *rivals* (:func:`rivals_of`): these views cannot tell
 them apart, and further measured channels may (:mod:`compare.channels`). Among rivals, one with no
 parameter pinned on a bound of its search (the error still falling towards it) is claimed before one with such a
-parameter (:func:`interior_rival`). A disagreement of the baseline larger than
+parameter (:func:`interior_rival`), and a once-per-revolution error of a shaft before a fluctuation fitted onto
+that shaft's order (:func:`shaft_locked_twin`). A disagreement of the baseline larger than
 ``unexplained_db`` that no claimed effect halves is reported as unexplained:
 nothing in the registry accounts for it, and no attribution is forced.
 """
@@ -145,6 +146,11 @@ class CandidateResult:
     #: a claimed fluctuation whose sidebands read another modulation type than the measurement's: its refit on
     #: the sidebands (compare.sideband_fit), None when not run
     sideband_fit: dict | None = None
+    #: a fluctuation on a shaft order ({"kind": "fluctuation", "shaft", "order"}) or a once-per-revolution error
+    #: ({"kind": "revolution", "shafts"}); empty otherwise (compare.response.mark_shaft_locks, :func:`shaft_locked_twin`)
+    shaft_lock: dict = field(default_factory=dict)
+    #: the claimed candidate that a rule moved the claim from ({"effect", "rule"}), None when it ranked first
+    claimed_over: dict | None = None
 
     @property
     def worst_view_rise_db(self) -> float:
@@ -187,7 +193,8 @@ class CandidateResult:
                 "realisation_scatter_db": self.realisation_scatter_db,
                 "model_error_db": self.model_error_db if math.isfinite(self.model_error_db) else None,
                 "joint_refit": self.joint_refit, "at_bound": dict(self.at_bound), "pinned": self.pinned,
-                "response": dict(self.response), "sideband_fit": self.sideband_fit}
+                "response": dict(self.response), "sideband_fit": self.sideband_fit,
+                "shaft_lock": dict(self.shaft_lock), "claimed_over": self.claimed_over}
 
     @property
     def pinned(self) -> list[str]:
@@ -220,10 +227,32 @@ class Attribution:
     def claimed(self) -> list:
         return [c for c in self.candidates if c.claimed]
 
+    @property
+    def claim_order(self) -> str | None:
+        """Why the claim is not the candidate that ranked first (:func:`claimed_over_message`), None when it is."""
+        top = self.claimed[0] if self.claimed else None
+        return claimed_over_message(top, self.candidates) if top is not None and top.claimed_over else None
+
     def to_dict(self) -> dict:
         return {"candidates": [c.to_dict() for c in self.candidates], "unexplained": self.unexplained,
+                "claim_order": self.claim_order,
                 "claimed": [c.effect for c in self.claimed], "rivals": list(self.rivals), "elapsed_s": self.elapsed_s,
                 "n_simulations": self.n_simulations, "group_seconds": self.group_seconds, "resolution": self.resolution}
+
+
+def claimed_over_message(claim, candidates) -> str:
+    """Why ``claim`` was claimed before the candidate that ranked first (``claim.claimed_over``:
+    :func:`compare.candidates.interior_rival` or :func:`compare.candidates.shaft_locked_twin`)."""
+    over = claim.claimed_over
+    first = next((c for c in candidates if c.effect == over["effect"]), None)
+    if over["rule"] == "shaft_locked" and first is not None and first.shaft_lock:
+        lock = first.shaft_lock
+        return (f"claimed {claim.effect} before {first.effect} ({100 * first.reduction:.1f} % against "
+                f"{100 * claim.reduction:.1f} %): the fluctuation's fitted frequency sits on {lock['order']} x the "
+                f"{lock['shaft']}'s rotation, where a once-per-revolution error of that shaft makes the same "
+                "sidebands without a frequency to fit; only a speed or torque channel tells them apart")
+    return (f"claimed {claim.effect} before {over['effect']}: the latter's fit is pinned on a bound of its search, "
+            "this one reaches the measurement inside its range")
 
 
 def passes_claim_rule(c: CandidateResult, settings: AttributionSettings) -> bool:
@@ -254,8 +283,11 @@ def choose_claim(results: list, settings: AttributionSettings) -> CandidateResul
             return None
         if c.status == "fitted" and passes_claim_rule(c, settings):
             chosen = interior_rival(c, results, settings) or c
+            twin = shaft_locked_twin(c, chosen, results, settings)
+            chosen = twin or chosen
             chosen.claimed = True
             if chosen is not c:          # first in the list, as a claim the further channels moved (compare.channels)
+                chosen.claimed_over = {"effect": c.effect, "rule": "shaft_locked" if twin is not None else "interior"}
                 results.sort(key=lambda r: not r.claimed)
             return chosen
     return None
@@ -278,6 +310,32 @@ def interior_rival(best: CandidateResult, results: list, settings: AttributionSe
         return None
     for r in results:
         if (r is not best and r.status == "fitted" and not r.pinned and passes_claim_rule(r, settings)
+                and best.reduction - r.reduction <= settings.rival_reduction):
+            return r
+    return None
+
+
+def shaft_locked_twin(best: CandidateResult, chosen: CandidateResult, results: list,
+                      settings: AttributionSettings) -> CandidateResult | None:
+    """When the claim ``chosen`` is a fluctuation whose fitted frequency sits on an order of shaft S (its
+    ``shaft_lock``) and a once-per-revolution error of S passes the claim rule within ``rival_reduction`` of
+    ``best`` (the best passing candidate), that error (the best such, pinned or not); else None.
+
+    Why: on an accelerometer a fluctuation locked to a shaft's rotation and a once-per-revolution error of that
+    shaft put the same sidebands around the mesh harmonics, and the fluctuation matches them only by fitting its
+    frequency onto the shaft's: a frequency that lands on a shaft order is the signature of the shaft, which the
+    error explains without a free frequency (what a diagnostician reads from sidebands at +/-k fr: that gear's
+    runout or cumulative pitch error). Found on the independent simulator of ``tests/foreign_rig.py`` (seed 6): a
+    random-walk pinion pitch error was claimed as a torque fluctuation of 75 % at 16.67 Hz, the pinion's rotation
+    (66.5 %), against the pinion eccentricity's 64.3 % (on its 200 um bound). This comes after
+    :func:`interior_rival`: a bound says the error's range is short, not that the shaft is not the source. The
+    fluctuation stays a rival, and a speed or torque channel (compare.channels) still decides between them."""
+    lock = chosen.shaft_lock
+    if lock.get("kind") != "fluctuation":
+        return None
+    for r in results:
+        if (r is not chosen and r.status == "fitted" and r.shaft_lock.get("kind") == "revolution"
+                and lock["shaft"] in r.shaft_lock["shafts"] and passes_claim_rule(r, settings)
                 and best.reduction - r.reduction <= settings.rival_reduction):
             return r
     return None

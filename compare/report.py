@@ -229,6 +229,8 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
             from compare.channels import resolution_message
 
             parts.append("<p><b>Further channels:</b> " + html.escape(resolution_message(att["resolution"])) + ".</p>")
+        if att.get("claim_order"):
+            parts.append("<p><b>Claim order:</b> " + html.escape(att["claim_order"]) + ".</p>")
         if att.get("rivals"):
             parts.append("<p><b>Not distinguishable from the claimed " + html.escape(", ".join(att["claimed"]))
                          + ":</b> " + html.escape(", ".join(att["rivals"])) + " lowers the error almost as much "

@@ -133,6 +133,38 @@ def shaft_order_of(f_hz: float, speed_rpm: float, pinion_teeth: int, wheel_teeth
     return None
 
 
+def revolution_shafts(effect, pair) -> list[str]:
+    """The shafts with whose revolution a displacement effect's deviation repeats (hooks 2a-2c): ``"pinion"`` and/or
+    ``"wheel"`` when its period in mesh cycles (:meth:`datagen.effects.base.Effect.deviation_period_cycles`) is a
+    whole number of that gear's revolutions, i.e. a once-per-revolution error of that shaft (an eccentricity, a
+    cumulative pitch error); empty for an effect alike on every tooth or one acting otherwise."""
+    from datagen.effects.base import EffectContext
+
+    if not ({"tooth_deviation_m", "angle_deviation_m", "centre_offset_m"} & effect.hooks()):
+        return []
+    period = int(effect.deviation_period_cycles(EffectContext(pair=pair, speed_rpm=0.0, torque_nm=0.0)))
+    teeth = {"pinion": pair.pinion.teeth, "wheel": pair.wheel.teeth}
+    return [s for s, z in teeth.items() if period > 1 and period % z == 0]
+
+
+def mark_shaft_locks(candidates, pair, *, speed_rpm: float, resolution_hz: float) -> None:
+    """Set ``shaft_lock`` of each fitted candidate (:func:`compare.candidates.shaft_locked_twin` reads it): a
+    fluctuation whose frequency sits on a shaft order within ``resolution_hz`` (:func:`shaft_order_of`) gets
+    ``{"kind": "fluctuation", "shaft": ..., "order": k}``, a once-per-revolution error (:func:`revolution_shafts`)
+    ``{"kind": "revolution", "shafts": [...]}``; every other candidate keeps ``{}``."""
+    for c in candidates:
+        if not c.params:
+            continue
+        effect = c.build_effect()
+        if acts_on_operating_point(c.effect):
+            at = shaft_order_of(fluctuation_frequency(effect, speed_rpm), speed_rpm, pair.pinion.teeth,
+                                pair.wheel.teeth, resolution_hz)
+            c.shaft_lock = {"kind": "fluctuation", **at} if at else {}
+        else:
+            shafts = revolution_shafts(effect, pair)
+            c.shaft_lock = {"kind": "revolution", "shafts": shafts} if shafts else {}
+
+
 def response_text(response: dict, effect: str = "it") -> str:
     """One line on what a fitted fluctuation does to the shafts (CLI, report, messages); with the modulation
     types, a second sentence on them (:func:`compare.modulation.modulation_text`)."""
@@ -188,5 +220,5 @@ def attach_responses(candidates, model, pair, *, speed_rpm: float, torque_nm: fl
     return n
 
 
-__all__ = ["acts_on_operating_point", "attach_responses", "modulations", "fluctuation_response", "line_amplitude",
-           "response_text", "shaft_order_of"]
+__all__ = ["acts_on_operating_point", "attach_responses", "fluctuation_response", "line_amplitude", "mark_shaft_locks",
+           "modulations", "response_text", "revolution_shafts", "shaft_order_of"]

@@ -198,6 +198,28 @@ SCHEMA = {
                                                             "would show (the fitted amplitude_fraction is the "
                                                             "drive's, before the drive train); empty otherwise"},
                                                         "sideband_fit": _SIDEBAND_FIT,
+                                                        "shaft_lock": {
+                                                            "type": "object",
+                                                            "description": "a fluctuation fitted onto a shaft "
+                                                            "order {kind: fluctuation, shaft, order}, or a "
+                                                            "once-per-revolution error {kind: revolution, shafts}; "
+                                                            "empty otherwise (compare.response.mark_shaft_locks)",
+                                                            "properties": {
+                                                                "kind": {"enum": ["fluctuation", "revolution"]},
+                                                                "shaft": {"enum": ["pinion", "wheel"]},
+                                                                "order": {"type": "integer"},
+                                                                "shafts": {"type": "array", "items": {
+                                                                    "enum": ["pinion", "wheel"]}}}},
+                                                        "claimed_over": {
+                                                            "type": ["object", "null"],
+                                                            "required": ["effect", "rule"],
+                                                            "properties": {"effect": {"type": "string"},
+                                                                           "rule": {"enum": ["interior",
+                                                                                             "shaft_locked"]}},
+                                                            "description": "the candidate that ranked first when a "
+                                                            "rule claimed this one instead: interior (that one's fit "
+                                                            "pinned on a bound), shaft_locked (that one a fluctuation "
+                                                            "on this shaft's order); null otherwise"},
                                                         "realisation_scatter_db": {
                                                             "type": ["number", "null"],
                                                             "description": "1-sigma of the error over "
@@ -222,6 +244,10 @@ SCHEMA = {
                 "rivals": {"type": "array", "items": {"type": "string"},
                            "description": "effects that pass the claim rule within 5 % of the claimed one's "
                                           "reduction: these views cannot tell them apart"},
+                "claim_order": {"type": ["string", "null"],
+                                "description": "why the claim is not the candidate that ranked first (a rule of "
+                                               "compare.candidates: interior_rival, shaft_locked_twin); null when "
+                                               "it is"},
                 "elapsed_s": {"type": "number"}, "n_simulations": {"type": "integer"},
                 "group_seconds": {"type": "object"},
                 "resolution": {"type": ["object", "null"],

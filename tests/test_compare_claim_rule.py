@@ -283,3 +283,81 @@ def test_a_claim_whose_amount_the_record_does_not_bound_escalates():
            "as_written_best": {"effect": "backlash", "reduction": 0.6, "claimed": True}}
     assert "does not bound its amount" in reason_text(doc)
     assert "no claimed effect explains 50 %" in reason_text({**doc, "reason": "unexplained"})
+
+
+def test_a_once_per_revolution_error_is_claimed_before_a_fluctuation_fitted_onto_its_shaft_order():
+    """choose_claim / shaft_locked_twin, on the numbers of the independent simulator (tests/foreign_rig.py, seed 6,
+    spur-gds at 1000 rpm, a random-walk pinion pitch error of F_p = 40 um, whose family is the pinion's
+    once-per-revolution errors; 2 s record, 0.5 Hz resolution): a torque fluctuation of 75 % fitted at 16.667 Hz,
+    the pinion's rotation, took 66.5 % off the 17.56 dB error, the pinion eccentricity 64.3 % on its 200 um bound
+    (pinned), the pitch error 52.5 %. The eccentricity is claimed and put first, the fluctuation stays its rival and
+    the claim says why. Not moved: a fluctuation off every shaft order (37 Hz), an error of the other shaft, an
+    error more than 5 % behind; a pinned once-per-revolution error is not given up for a fluctuation on its
+    shaft's order (interior_rival alone would)."""
+    from compare.candidates import Attribution, AttributionSettings, CandidateResult, choose_claim, rivals_of
+    from compare.fitspace import bounds_hit, fit_space
+    from compare.response import mark_shaft_locks, revolution_shafts
+    from datagen.effects import EffectSpec, get
+    from datagen.geometry import preset
+
+    pair = preset("spur-gds")
+    base = {"order": 17.0, "envelope": 18.0}
+
+    def cand(name, reduction, params, rises=None):
+        total = 17.56 * (1.0 - reduction)
+        c = CandidateResult(name, "", dict(params), {}, total, 17.56, {"order": total, "envelope": total},
+                            "2 s", 1, baseline_view_error_db=base)
+        c.at_bound = bounds_hit(fit_space(get(name)), c.params)
+        c.rises_off_bound = dict(rises or {})
+        return c
+
+    def ranked(*cands):
+        out = sorted(cands, key=lambda c: -c.reduction)
+        mark_shaft_locks(out, pair, speed_rpm=1000.0, resolution_hz=0.5)
+        return out
+
+    def torque(f_hz=16.6666, reduction=0.665):
+        return cand("torque_fluctuation", reduction, {"frequency_hz": f_hz, "amplitude_fraction": 0.75})
+
+    def ecc(which="pinion", reduction=0.643):
+        return cand(f"eccentricity_{which}", reduction, {"amplitude_m": 200e-6}, {"amplitude_m": "upper"})
+
+    # which shafts a displacement effect repeats with, read off its period (not its name)
+    def shafts(name, **params):
+        return revolution_shafts(EffectSpec.from_dict({"name": name, **params}).build(), pair)
+
+    assert shafts("eccentricity_pinion") == ["pinion"] and shafts("eccentricity_wheel") == ["wheel"]
+    assert shafts("pitch_error", gears="wheel") == ["wheel"] and shafts("pitch_error", gears="both") == ["pinion", "wheel"]
+    assert shafts("profile_error") == [] and shafts("tip_relief") == [] and shafts("backlash") == []
+
+    t, e = torque(), ecc()
+    pitch = cand("pitch_error", 0.525, {"grade": 9.0, "gears": "pinion"})
+    rs = ranked(t, e, pitch)
+    assert t.shaft_lock == {"kind": "fluctuation", "shaft": "pinion", "order": 1}
+    assert e.shaft_lock == {"kind": "revolution", "shafts": ["pinion"]} and e.pinned == ["amplitude_m"]
+    claimed = choose_claim(rs, AttributionSettings())
+    assert claimed is e and rs[0] is e and not t.claimed
+    assert e.claimed_over == {"effect": "torque_fluctuation", "rule": "shaft_locked"}
+    assert rivals_of(claimed, rs, AttributionSettings()) == ["torque_fluctuation"]
+    note = Attribution(candidates=rs, unexplained=[], elapsed_s=0.0, n_simulations=0).claim_order
+    assert "1 x the pinion's rotation" in note and "torque_fluctuation" in note
+    # the fluctuation's second order of the pinion (33.3 Hz, within the resolution) is locked too
+    t2, e2 = torque(33.2), ecc()
+    assert choose_claim(ranked(t2, e2), AttributionSettings()) is e2 and t2.shaft_lock["order"] == 2
+    # not moved: off every shaft order; the other shaft's error; an error 6 % behind
+    for rs in (ranked(t37 := torque(37.0), ecc()), ranked(tw := torque(), ecc("wheel")),
+               ranked(tf := torque(), ecc(reduction=0.605))):
+        first = rs[0]
+        assert choose_claim(rs, AttributionSettings()) is first and first.effect == "torque_fluctuation"
+        assert first.claimed_over is None
+    assert t37.shaft_lock == {} and tw.shaft_lock["shaft"] == "pinion" and tf.shaft_lock["kind"] == "fluctuation"
+    # the pinned error ahead of the fluctuation on its shaft's order: it stays claimed (interior_rival alone
+    # would have moved the claim to the fluctuation, which fits inside its range)
+    e3, t3 = ecc(reduction=0.665), torque(reduction=0.643)
+    rs = ranked(e3, t3)
+    assert choose_claim(rs, AttributionSettings()) is e3 and e3.claimed_over is None
+    # ... while a fluctuation off the shaft orders still takes the claim from the pinned error
+    e4, t4 = ecc(reduction=0.665), torque(37.0, reduction=0.643)
+    rs = ranked(e4, t4)
+    assert choose_claim(rs, AttributionSettings()) is t4 and t4.claimed_over == {"effect": "eccentricity_pinion",
+                                                                                   "rule": "interior"}
