@@ -107,6 +107,8 @@ def apply_resolution(attribution, resolution: Resolution) -> None:
     and set its rivals."""
     for c in attribution.candidates:
         c.claimed = c.effect == resolution.claimed
+        if not c.claimed:          # the further channels decided; a rule's order of the sensor alone is moot
+            c.claimed_over = None
     attribution.candidates.sort(key=lambda c: not c.claimed)       # stable: the rest stay ranked by reduction
     attribution.rivals = list(resolution.rivals)
     attribution.resolution = resolution.to_dict()
