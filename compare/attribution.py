@@ -135,8 +135,8 @@ def attribute(ref: Reference, model, baseline_residual: np.ndarray, *, candidate
     for c in results:
         if c.params:
             c.at_bound = bounds_hit(fit_space(get(c.effect)), c.params)
-    pair = ref.measurement.pair
-    mark_shaft_locks(results, pair, speed_rpm=ref.speed.speed_rpm, resolution_hz=ref.fs_hz / ref.x.size)
+    mark_shaft_locks(results, ref.measurement.pair, speed_rpm=ref.speed.speed_rpm,
+                     resolution_hz=ref.fs_hz / ref.x.size)
     results.sort(key=lambda c: -c.reduction)
     claimed = choose_claim(results, settings)
     return Attribution(candidates=results, unexplained=unexplained_of(results, disagreements, settings), elapsed_s=time.perf_counter() - t0,

@@ -153,7 +153,7 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
         messages.append(f"the model agrees with the measurement within the noise (excess error "
                         f"{res.excess_total_db:.2f} dB, below the noise error {res.noise_total_db:.2f} dB): "
                         "there is nothing to attribute, and no effect is claimed")
-    if att is not None and att.claimed and att.claimed[0].claimed_over:
+    if att is not None and att.claim_order:
         messages.append(att.claim_order)
     if att is not None and att.claimed and att.rivals:
         messages.append(f"claimed {att.claimed[0].effect}, but {', '.join(att.rivals)} lowers the error almost as "
