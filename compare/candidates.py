@@ -244,8 +244,8 @@ def claimed_over_message(claim, candidates) -> str:
     """Why ``claim`` was claimed before the candidate that ranked first (``claim.claimed_over``:
     :func:`compare.candidates.interior_rival` or :func:`compare.candidates.shaft_locked_twin`)."""
     over = claim.claimed_over
-    first = next((c for c in candidates if c.effect == over["effect"]), None)
-    if over["rule"] == "shaft_locked" and first is not None and first.shaft_lock:
+    if over["rule"] == "shaft_locked":
+        first = next(c for c in candidates if c.effect == over["effect"])
         lock = first.shaft_lock
         return (f"claimed {claim.effect} before {first.effect} ({100 * first.reduction:.1f} % against "
                 f"{100 * claim.reduction:.1f} %): the fluctuation's fitted frequency sits on {lock['order']} x the "
