@@ -16,12 +16,20 @@ ladder of values around the fit (offsets :data:`LADDER_DU` in the search coordin
 simulated on the whole record :data:`REALISATIONS` times (the value scaled by ``1 + k 1e-12``,
 :func:`twin_params`). A regular record repeats its error to ~1e-12 dB over such twins (the loop is deterministic
 and smooth in its parameters); a chaotic one does not (:attr:`Profile.chaotic`). The fit becomes the value of
-lowest mean error; the values whose mean error is within ``2 s sqrt((c + c_best) / R)`` of it are consistent
+lowest mean error; the values whose mean error is within ``d s sqrt((c + c_best) / R)`` of it are consistent
 with the measurement (``s`` the realisation scatter pooled over the chaotic values, ``c`` 1 for a chaotic value,
-0 for a regular one: two means of ``R`` draws differ by that at about 2 sigma; two regular values only when
-their errors are equal), and the interval runs between the nearest rejected values on either side. Where every
-value up to a bound is consistent the interval is open on that side: the measurement does not bound the
-parameter there.
+0 for a regular one; two regular values only when their errors are equal), and the interval runs between the
+nearest rejected values on either side. Where every value up to a bound is consistent the interval is open on
+that side: the measurement does not bound the parameter there.
+
+``d`` is Gupta's subset-selection constant (:func:`selection_constant`), not a fixed 2: the lowest of ``k``
+noisy means is biased low (the winner's curse), so the value of lowest *expected* error can lie further above
+the lowest observed mean than two standard deviations of a difference: on a ladder of 27 values, up to 2.7 of
+them in 5 % of the draws. With the fixed 2, a flat ladder's interval missed a value at its bound in 24 % of the
+draws (``tests/test_compare_chaos.py`` measures it), and one realisation of the 50 um backlash example got
+[26.6, 37.6] um (stop 46). ``d`` keeps the miss rate at the stated 5 % for every configuration of the
+expected errors (Gupta 1965: the least favourable one is all equal), the scatter's own uncertainty (its
+degrees of freedom) included (Gupta & Sobel 1962).
 
 The ladder is dense (:data:`LADDER_STEP_U`, 0.025 in ``u``: a factor 1.19 for backlash) because the minimum can
 be a narrow valley between rattle regimes. Measured on the backlash example (30 um, noise seed 4, the model's
@@ -34,6 +42,13 @@ simulations at two realisations).
 
 References
 ----------
+Gupta, S. S. (1965). On some multiple decision (selection and ranking) rules. Technometrics 7(2), 225-245
+    (the subset that holds the best of k normal populations with probability P*: every population whose mean
+    is within d sigma sqrt(2/n) of the best observed one).
+Gupta, S. S. & Sobel, M. (1962). On selecting a subset which contains all populations better than a standard.
+    Biometrika 49, 495-507 (d with the variance estimated: the Studentized version).
+Dunnett, C. W. (1955). A multiple comparison procedure for comparing several treatments with a control. JASA
+    50, 1096-1121 (Table 1a: the same one-sided points, correlation 1/2; the tests check d against it).
 Strogatz, S. H. (2015). Nonlinear Dynamics and Chaos, 2nd ed., sec. 9.3 (sensitive dependence on initial
     conditions: nearby trajectories separate exponentially, so only statistics of a chaotic record are
     reproducible).
@@ -42,6 +57,7 @@ Kahraman, A. & Singh, R. (1990). Non-linear dynamics of a spur gear pair. J. Sou
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -64,6 +80,37 @@ REALISATIONS = 2
 SAME_ERROR_DB = 1e-9
 #: realisations of a chaotic model whose mean views a comparison reads (compare.comparison.evaluate, ensemble)
 ENSEMBLE = 4
+#: probability that the consistent values hold the one of lowest expected error (Gupta's P*; module docstring)
+SELECTION_CONFIDENCE = 0.95
+
+
+@functools.lru_cache(maxsize=256)
+def selection_constant(k: int, dof: float | None = None, confidence: float = SELECTION_CONFIDENCE) -> float:
+    """Gupta's subset-selection constant ``d`` for ``k`` means of equal variance: the subset of every mean within
+    ``d sigma sqrt(2 / R)`` of the lowest holds the one of lowest expectation with probability ``confidence``
+    whatever the expectations are. In the least favourable case (all equal) that probability is
+    ``E_u[ integral phi(z) Phi(z + d sqrt(2) u)^(k-1) dz ]``, ``u = s / sigma`` (``sqrt(chi2_dof / dof)``;
+    ``u = 1`` when ``dof`` is None: the variance known). Solved for ``d`` on fixed quadratures (normal: 801
+    points over +/-8; ``u``: 200 quantiles of its distribution), so the value is deterministic. ``k <= 1``: 0."""
+    from scipy import optimize, stats
+
+    if k <= 1:
+        return 0.0
+    if not 0.5 < confidence < 1.0:
+        raise ValueError(f"confidence = {confidence} is outside (0.5, 1)")
+    z = np.linspace(-8.0, 8.0, 801)
+    wz = stats.norm.pdf(z) * (z[1] - z[0])
+    if dof is None or not math.isfinite(dof):
+        u = np.ones(1)
+    elif dof <= 0:
+        raise ValueError(f"dof = {dof} must be positive (or None: the variance known)")
+    else:
+        u = np.sqrt(stats.chi2.ppf((np.arange(200) + 0.5) / 200, dof) / dof)
+
+    def coverage(d):
+        return float(np.mean(stats.norm.cdf(z[None, :] + d * math.sqrt(2.0) * u[:, None]) ** (k - 1) @ wz))
+
+    return float(optimize.brentq(lambda d: coverage(d) - confidence, 0.0, 20.0, xtol=1e-6))
 
 
 def twin_params(params: dict, space: FitSpace, k: int = 1) -> dict:
@@ -105,14 +152,25 @@ class Profile:
     def best(self) -> int:
         return int(np.argmin(self.mean_db))
 
+    @property
+    def selection_d(self) -> float:
+        """Gupta's constant for this ladder (:func:`selection_constant`): ``k`` its values of finite error, the
+        scatter's degrees of freedom ``(R - 1)`` per chaotic value; 0 when none is chaotic (``s`` = 0)."""
+        n_chaotic = int(self.chaotic.sum())
+        r = self.errors_db.shape[1]
+        if n_chaotic == 0 or r < 2:
+            return 0.0
+        k = int(np.isfinite(self.mean_db).sum())
+        return selection_constant(k, dof=n_chaotic * (r - 1))
+
     def consistent(self) -> np.ndarray:
-        """Per value: whether its mean error is within ``2 s sqrt((c + c_best) / R)`` of the lowest mean (``c``
-        1 for a chaotic value, 0 for a regular one: two regular values are consistent only with equal errors,
-        the plateau where the parameter no longer enters the record)."""
+        """Per value: whether its mean error is within ``d s sqrt((c + c_best) / R)`` of the lowest mean (``d``
+        :attr:`selection_d`; ``c`` 1 for a chaotic value, 0 for a regular one: two regular values are
+        consistent only with equal errors, the plateau where the parameter no longer enters the record)."""
         m, c = self.mean_db, self.chaotic.astype(float)
         r = self.errors_db.shape[1]
         b = self.best
-        return m <= m[b] + 2.0 * self.scatter_db * np.sqrt((c + c[b]) / r) + SAME_ERROR_DB
+        return m <= m[b] + self.selection_d * self.scatter_db * np.sqrt((c + c[b]) / r) + SAME_ERROR_DB
 
     def interval(self) -> tuple[float | None, float | None]:
         """The nearest ladder values below and above the consistent ones (:meth:`consistent`) that the
