@@ -50,6 +50,29 @@ def test_a_fit_at_the_truth_is_not_made_worse(rig):
     assert abs(grade - 8.0) <= PITCH.check[2]
 
 
+def test_no_effect_is_refitted_beside_an_effect_on_a_bound_of_its_search(rig):
+    """compare.refit (module docstring; measured on the independent simulator: a 1 um backlash, its search's lower
+    bound, pulled a wheel eccentricity from 47 to 112-130 um for 50). The model of the first test plus a tip relief
+    whose length sits on the lower bound of its search (0.05): the pitch error's refit, which moves grade 7 to 8
+    without it (first test), is not run; the note names the tip relief and its bound, the model is unchanged and
+    the message says why. Would fail if the refit ran beside the stand-in or the note lost it."""
+    from compare.refit import refit_message, stand_ins
+
+    m, ref = rig
+    model = ComparisonModel(effects=build_effects(({"name": "pitch_error", "grade": 7.0},
+                                                   {"name": "transmission_path", "housing_frequency_hz": 2900.0},
+                                                   {"name": "tip_relief", "amount_m": 1e-6, "length_fraction": 0.05})))
+    assert stand_ins(model) == {"tip_relief": {"length_fraction": "lower"}}
+    out, notes = refit_effects(m, model, names=["pitch_error"], reference=ref)
+    (note,) = notes
+    assert not note["kept"] and note["held_by"] == {"tip_relief": {"length_fraction": "lower"}}, note
+    assert note["after"] == note["before"] and out.effects == model.effects
+    assert "tip_relief (length_fraction on its lower bound)" in refit_message(note)
+    # the stand-in itself may be refitted: no other effect is on a bound
+    _, (own,) = refit_effects(m, model, names=["tip_relief"], reference=ref)
+    assert own["held_by"] == {}
+
+
 def test_refitting_an_effect_the_model_lacks_is_refused(rig):
     m, ref = rig
     with pytest.raises(InputError, match="refit.*backlash.*pitch_error"):
