@@ -122,7 +122,7 @@ def _march_linear(S, B, shared, G, dg, us, theta, x_static, z1, dynamic, i_phi1,
 
 @njit(cache=True)
 def _march_law(law, S, B, shared, G, dg, us, theta, x_static, z1, dynamic, i_phi1, n, dt,
-               ppc, nflt, last, nrec, offset, k_tab, e_tab, k_slots, e_slots, c_m, sigma,
+               ppc, nflt, last, nrec, offset, k_tab, e_tab, k_slots, ef_slots, c_m, sigma,
                law_row, P, tol, max_iter, traj, force):
     """A chunk of steps with a nonlinear law ``law`` for the cases whose ``law_row >= 0`` (parameters
     ``P[law_row]``), solved by Newton per case as :func:`datagen.newmark.solve_mesh_law` does; the other cases in
@@ -151,7 +151,8 @@ def _march_law(law, S, B, shared, G, dg, us, theta, x_static, z1, dynamic, i_phi
             else:
                 for s in range(n_slots):
                     ks[s] = k_slots[a, s] * g + k_slots[b, s] * f
-                    es[s] = e_slots[a, s] * g + e_slots[b, s] * f
+                    ef = ef_slots[a, s] * g + ef_slots[b, s] * f        # MeshRecords.slots_at
+                    es[s] = ef / ks[s] if ks[s] > 0.0 else 0.0
                 delta = d_lin
                 done = False
                 F = 0.0
@@ -219,7 +220,7 @@ def run_general(batch, S0: np.ndarray, n_steps: int, chunk: int, inputs, theta_o
         if linear:
             bad = _march_linear(*args, mesh.c_m, batch.sigma, traj, force)
         else:
-            bad = _march_law(mesh.law, *args, rec.k_slots, rec.e_slots, mesh.c_m, batch.sigma, mesh.law_row,
+            bad = _march_law(mesh.law, *args, rec.k_slots, rec.ef_slots, mesh.c_m, batch.sigma, mesh.law_row,
                              mesh.law_params, mesh.tol, mesh.max_iter, traj, force)
         yield i0, traj, force, int(bad)
 

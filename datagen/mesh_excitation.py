@@ -190,8 +190,13 @@ class MeshRecords:
         n_slots = max(r.k_slots.shape[1] for r in records)
         pad = [np.pad(r.k_slots, ((0, 0), (0, n_slots - r.k_slots.shape[1]))) for r in records]
         self.k_slots = np.concatenate(pad)
-        pad = [np.pad(r.e_slots, ((0, 0), (0, n_slots - r.e_slots.shape[1]))) for r in records]
-        self.e_slots = np.concatenate(pad)
+        # each pair's error force k_s e_s (N), not its deviation e_s: between two record points a pair's deviation
+        # is read as its interpolated error force over its interpolated stiffness (:meth:`all_at`). Interpolating
+        # e_s itself breaks at a contact edge, where the record holds k_s = 0 and e_s = 0 at one point: a pair
+        # entering contact was read at a fraction of its deviation (of a 47 um eccentricity's, say, separating it
+        # by tens of um), and a nonlinear law did not reduce to the linear one while every pair touched
+        pad = [np.pad(r.k_slots * r.e_slots, ((0, 0), (0, n_slots - r.e_slots.shape[1]))) for r in records]
+        self.ef_slots = np.concatenate(pad)
         self.has_error = any(r.has_error for r in records)
         # for the per-step lookup (:meth:`_index`): the period as a float, the last index, the wrap-around step
         self._n_float = self.n.astype(float)
@@ -226,11 +231,18 @@ class MeshRecords:
         g = 1 - f
         k = self.k[a] * g + self.k[b] * f
         e = self.error_force[a] * g + self.error_force[b] * f if self.has_error else np.zeros_like(k)
-        f, g = f[:, None], g[:, None]
-        return k, e, self.k_slots[a] * g + self.k_slots[b] * f, self.e_slots[a] * g + self.e_slots[b] * f
+        return (k, e) + self._slots(a, b, f)
 
     def slots_at(self, x_cycles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Per-pair stiffness and deviation (C, S) at positions ``x_cycles`` (C,)."""
-        a, b, f = self._index(x_cycles)
+        """Per-pair stiffness and deviation (C, S) at positions ``x_cycles`` (C,): the stiffness interpolated, the
+        deviation as the interpolated error force over it (0 where the pair is out of contact). So
+        ``sum(k_s * (delta - e_s))`` is the linear law's ``k delta - E`` at every position."""
+        return self._slots(*self._index(x_cycles))
+
+    def _slots(self, a, b, f):
         f = f[:, None]
-        return (self.k_slots[a] * (1 - f) + self.k_slots[b] * f, self.e_slots[a] * (1 - f) + self.e_slots[b] * f)
+        g = 1 - f
+        ks = self.k_slots[a] * g + self.k_slots[b] * f
+        efs = self.ef_slots[a] * g + self.ef_slots[b] * f
+        es = np.divide(efs, ks, out=np.zeros_like(efs), where=ks > 0)
+        return ks, es
