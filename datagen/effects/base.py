@@ -189,7 +189,9 @@ class MeshState:
     k_slots_n_per_m : ndarray (B, S)
         Stiffness of each tooth pair in contact (N/m), 0 for an empty slot.
     e_slots_m : ndarray (B, S)
-        Stiffness-weighted mean deviation of each tooth pair (m).
+        Stiffness-weighted mean deviation of each tooth pair (m), 0 for an empty slot; between record points
+        the pair's error force over its stiffness, so ``sum(k_slots * e_slots) == error_force`` and a law that
+        keeps every pair touching reduces to the linear one (:meth:`datagen.mesh_excitation.MeshRecords.slots_at`).
     """
 
     k_n_per_m: np.ndarray
