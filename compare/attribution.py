@@ -34,7 +34,9 @@ import numpy as np
 
 from compare.candidates import (Attribution, AttributionSettings, CandidateResult, choose_claim, passes_claim_rule,
                                 rivals_of, unexplained_of)
-from compare.chaos import chaotic_realisations, may_be_chaotic, profile_ladder
+from compare.calibration import drivetrain_values
+from compare.chaos import (chaotic_realisations, hull_interval, interval_sigma, joint_selection, may_be_chaotic,
+                           pool_scatter, profile_ladder, profile_ladders)
 from compare.comparison import NOISE_DRAWS, Reference, evaluate, simulate_model
 from compare.error import effective_count
 from compare.fitspace import CHAIN_EFFECTS, bounds_hit, fit_space
@@ -300,22 +302,30 @@ def _confirm_on_record(results: list, ref: Reference, model, settings: Attributi
 def _profile_nonlinear(c: CandidateResult, ev, ref: Reference, model, settings: AttributionSettings, solver: dict):
     """Profile candidate ``c``, a nonlinear effect fitted on the whole record (residuals ``ev``), on the ladders of
     :func:`compare.chaos.profile_ladder` (whole record, several realisations per value). When the record is
-    chaotic at any ladder value, the fit is the ladder's: the values of lowest mean error, ``interval`` and
-    ``sigma`` what the realisation scatter allows, ``realisation_scatter_db`` that scatter. When it is regular
-    everywhere, the fit stays, and a parameter whose ladder shows a plateau reaching a bound (the record no
-    longer depends on it: backlash the back flanks never reach) gets that open interval and an infinite sigma.
+    chaotic at any ladder value, the fit is the ladder's: the values of lowest mean error at the model's drive
+    train; ``interval`` the hull of the interval the realisation scatter allows there and, unless the
+    measurement rejects it, the one at the drive train fitted with the candidate in (:func:`_drivetrain_draws`;
+    the ladder's minimum moves with the nuisances: :mod:`compare.chaos`, "Nuisances"), each in
+    ``drivetrain_intervals``; ``sigma`` a quarter of the hull, ``realisation_scatter_db`` the pooled scatter. When it is regular everywhere, the fit stays, and a
+    parameter whose ladder shows a plateau reaching a bound (the record no longer depends on it: backlash the
+    back flanks never reach) gets that open interval and an infinite sigma.
     Returns the residuals of the kept fit (for a ladder fit the mean views of its realisations, as
     :func:`compare.comparison.compare` reads the model with the effect added) and the number of simulations run."""
     from datagen.effects import EffectSpec, get
 
-    def errors(trials):
-        ex = [(EffectSpec.from_dict({"name": c.effect, **p}).build(),) for p in trials]
-        ys = simulate_model(ref, model, extra_effects_list=ex, seed=settings.seed,
-                            duration_s=ref.model_duration_s(), solver=solver)
-        return [evaluate(ref, y, ref.fs_hz, seed=settings.seed).residuals.total_db
-                if y is not None and np.all(np.isfinite(y)) else math.inf for y in ys]
+    def errors_at(models):
+        def errors(trials):
+            mods = [mod.with_effect(EffectSpec.from_dict({"name": c.effect, **p}).build())
+                    for mod in models for p in trials]
+            ys = simulate_model(ref, model, models=mods, seed=settings.seed, duration_s=ref.model_duration_s(),
+                                solver=solver)
+            return [evaluate(ref, y, ref.fs_hz, seed=settings.seed).residuals.total_db
+                    if y is not None and np.all(np.isfinite(y)) else math.inf for y in ys]
+        return errors
 
-    profiles = profile_ladder(fit_space(get(c.effect)), c.params, errors)
+    space = fit_space(get(c.effect))
+    centre = dict(c.params)
+    profiles = profile_ladder(space, centre, errors_at([model]))
     n = sum(p.errors_db.size for p in profiles)
     if not any(p.chaotic.any() for p in profiles):
         for p in profiles:
@@ -323,15 +333,59 @@ def _profile_nonlinear(c: CandidateResult, ev, ref: Reference, model, settings: 
             if None in iv:
                 c.interval[p.parameter], c.sigma[p.parameter] = iv, math.inf
         return ev, n
-    for p in profiles:
+    c.params.update({p.parameter: float(p.values[p.best]) for p in profiles})
+    draws, n_scan = _drivetrain_draws(c, ref, model, settings, solver)
+    n += n_scan
+    # every drive train's ladders in one batch (the ladder values are the same: the same centre)
+    per_draw = (profile_ladders(space, centre, errors_at([model.with_drivetrain(d) for d in draws]), len(draws))
+                if draws else [])
+    n += sum(p.errors_db.size for ps in per_draw for p in ps)
+    # one realisation scatter per parameter, pooled over the drive trains (compare.chaos.pool_scatter)
+    for j in range(len(profiles)):
+        pooled = pool_scatter([profiles[j]] + [ps[j] for ps in per_draw])
+        profiles[j] = pooled[0]
+        for ps, q in zip(per_draw, pooled[1:]):
+            ps[j] = q
+    ladders = [profiles] + per_draw
+    # per parameter, the values consistent at each drive train against the best over all of them; the model's own
+    # interval is kept whatever the other drive train says (it holds the fit, which is the model's)
+    masks = [joint_selection([ps[j] for ps in ladders]) for j in range(len(profiles))]
+    intervals = [[ps[j].interval(masks[j][i]) for j in range(len(profiles))] for i, ps in enumerate(ladders)]
+    rejected = [[iv is None for iv in ivs] for ivs in intervals]
+    intervals[0] = [p.interval() for p in profiles]
+    c.drivetrain_intervals = [{"drivetrain": dict(dt), "best": {p.parameter: float(p.values[p.best]) for p in ps},
+                               "best_error_db": {p.parameter: float(p.mean_db[p.best]) for p in ps},
+                               "interval": {p.parameter: iv for p, iv in zip(ps, ivs)},
+                               "rejected": {p.parameter: r for p, r in zip(ps, rej)},
+                               "realisation_scatter_db": max(p.scatter_db for p in ps)}
+                              for dt, ps, ivs, rej in zip([drivetrain_values(model)] + draws, ladders, intervals,
+                                                          rejected)]
+    for j, p in enumerate(profiles):
         c.params[p.parameter] = float(p.values[p.best])
-        c.interval[p.parameter] = p.interval()
-        c.sigma[p.parameter] = p.sigma()
-    c.realisation_scatter_db = max(p.scatter_db for p in profiles)
+        c.interval[p.parameter] = hull_interval([ivs[j] for ivs in intervals])
+        c.sigma[p.parameter] = interval_sigma(c.interval[p.parameter])
+    c.realisation_scatter_db = max(p.scatter_db for ps in [profiles] + per_draw for p in ps)
     # the chosen fit as a comparison reads a chaotic model: the mean views of its realisations
     y, others = chaotic_realisations(ref, model, seed=settings.seed, solver=solver,
                                      extra_effects=(c.build_effect(),))
     return evaluate(ref, y, ref.fs_hz, seed=settings.seed, ensemble=others).residuals, n + 1 + len(others)
+
+
+def _drivetrain_draws(c: CandidateResult, ref: Reference, model, settings: AttributionSettings,
+                      solver: dict) -> tuple[list, int]:
+    """The drive train a chaotic fit's interval also reads (:mod:`compare.chaos`, "Nuisances"): the nuisances
+    fitted with candidate ``c`` in at its ladder fit (:func:`compare.calibration.calibrate` from the model's
+    values, time-stepped on the whole record with the attribution's transient ``solver``, its order view).
+    Returns ``([drive train], simulations run)``; none when the calibration fails or stays at the model's."""
+    from compare.calibration import CalibrationSettings, calibrate
+
+    try:
+        cal = calibrate(ref, model, extra_effects=(c.build_effect(),), settings=CalibrationSettings(seed=settings.seed),
+                        solver=solver, time_stepped=True)
+    except (GearpitError, FloatingPointError, MemoryError, np.linalg.LinAlgError):
+        return [], 0
+    same = all(math.isclose(v, cal.start[k], rel_tol=1e-9) for k, v in cal.values.items())
+    return ([] if same else [dict(cal.values)]), cal.n_simulations
 
 
 def _refit_settings(calibration, settings: AttributionSettings):

@@ -252,7 +252,8 @@ def drivetrain_values(model, names=DEFAULT_PARAMETERS) -> dict:
 
 
 def calibrate(ref, model, *, extra_effects: tuple = (), settings: CalibrationSettings | None = None,
-              start: dict | None = None, solver: dict | None = None, free_effect: bool = False) -> Calibration:
+              start: dict | None = None, solver: dict | None = None, free_effect: bool = False,
+              time_stepped: bool = False) -> Calibration:
     """Fit the nuisance drive-train parameters of ``model`` (plus ``extra_effects``) to the reference
     (module docstring).
 
@@ -274,11 +275,15 @@ def calibrate(ref, model, *, extra_effects: tuple = (), settings: CalibrationSet
         Fit the numeric parameters of the last of ``extra_effects`` (its declared fit parameters,
         :func:`compare.fitspace.fit_space`) together with the nuisances, from its given values: the joint refit
         of a candidate effect (:mod:`compare.attribution`); the result's ``effect_params`` holds them.
+    time_stepped : bool
+        Keep the time-stepped effects in (a transient ``solver``): the drive train fitted with a nonlinear
+        candidate in, as :func:`compare.attribution._drivetrain_draws` does for a chaotic fit (module docstring:
+        held out otherwise).
     """
     settings = settings or CalibrationSettings()
     t0 = time.perf_counter()
-    held_out = tuple(e.name for e in tuple(model.effects) + tuple(extra_effects)
-                     if e.is_nonlinear or e.is_nonstationary)
+    held_out = () if time_stepped else tuple(e.name for e in tuple(model.effects) + tuple(extra_effects)
+                                             if e.is_nonlinear or e.is_nonstationary)
     if held_out:      # module docstring: time-stepped effects are held out
         model = replace(model, effects=tuple(e for e in model.effects if e.name not in held_out))
         extra_effects = tuple(e for e in extra_effects if e.name not in held_out)

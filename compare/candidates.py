@@ -130,6 +130,10 @@ class CandidateResult:
     #: measurement, None where that side reaches the bound; the realisation scatter of its error (dB)
     interval: dict = field(default_factory=dict)
     realisation_scatter_db: float | None = None
+    #: a chaotic fit's ladders per drive train (compare.chaos, "Nuisances"): the model's first, then the one fitted
+    #: with the candidate in; each {"drivetrain", "best", "best_error_db", "interval" (None: rejected), "rejected",
+    #: "realisation_scatter_db"}; ``interval`` is the hull of the model's and those not rejected
+    drivetrain_intervals: list = field(default_factory=list)
     #: a time-stepped candidate: the excess error of the model as the comparison simulated it, which the claim
     #: must lower by claim_reduction too (module docstring); NaN: not checked
     model_error_db: float = math.nan
@@ -191,6 +195,13 @@ class CandidateResult:
                 "worst_view_rise_db": self.worst_view_rise_db,
                 "interval": {k: list(v) for k, v in self.interval.items()},
                 "realisation_scatter_db": self.realisation_scatter_db,
+                "drivetrain_intervals": [{"drivetrain": dict(d["drivetrain"]), "best": dict(d["best"]),
+                                          "best_error_db": dict(d["best_error_db"]),
+                                          "interval": {k: (list(v) if v is not None else None)
+                                                       for k, v in d["interval"].items()},
+                                          "rejected": {k: bool(v) for k, v in d.get("rejected", {}).items()},
+                                          "realisation_scatter_db": d["realisation_scatter_db"]}
+                                         for d in self.drivetrain_intervals],
                 "model_error_db": self.model_error_db if math.isfinite(self.model_error_db) else None,
                 "joint_refit": self.joint_refit, "at_bound": dict(self.at_bound), "pinned": self.pinned,
                 "response": dict(self.response), "sideband_fit": self.sideband_fit,

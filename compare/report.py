@@ -20,7 +20,7 @@ import numpy as np
 
 from compare.candidates import bound_note
 from compare.response import response_text
-from compare.chaos import describe_interval
+from compare.chaos import describe_interval, drivetrains_message
 from compare.escalation import reason_text
 from gearpit import __version__
 from gearpit.atomic import atomic_path
@@ -215,6 +215,10 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
                      "a value the effect's range does not allow; among effects that lower the error alike (within "
                      "5 %), one with no parameter pinned is claimed before one with a pinned parameter.</p>")
         top = next((c for c in att["candidates"] if c["claimed"]), None)
+        for c in att["candidates"][:3]:
+            if c.get("drivetrain_intervals"):
+                parts.append("<p><b>Chaotic record:</b> " + html.escape(drivetrains_message(
+                    c["effect"], c["drivetrain_intervals"])) + ".</p>")
         if top is not None and top.get("joint_refit"):
             from compare.joint_refit import joint_refit_message
 

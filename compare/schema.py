@@ -220,6 +220,47 @@ SCHEMA = {
                                                             "rule claimed this one instead: interior (that one's fit "
                                                             "pinned on a bound), shaft_locked (that one a fluctuation "
                                                             "on this shaft's order); null otherwise"},
+                                                        "drivetrain_intervals": {
+                                                            "type": "array",
+                                                            "description": "a chaotic record's ladders per drive "
+                                                            "train (compare.chaos, Nuisances): the model's first, "
+                                                            "then the one fitted with the candidate in; interval is "
+                                                            "the hull of the model's and those not rejected; empty "
+                                                            "for a regular record",
+                                                            "items": {"type": "object",
+                                                                      "required": ["drivetrain", "best",
+                                                                                   "best_error_db", "interval",
+                                                                                   "rejected",
+                                                                                   "realisation_scatter_db"],
+                                                                      "properties": {
+                                                                          "drivetrain": {"type": "object",
+                                                                                         "additionalProperties":
+                                                                                             {"type": "number"}},
+                                                                          "best": {"type": "object",
+                                                                                   "additionalProperties":
+                                                                                       {"type": "number"}},
+                                                                          "best_error_db": {
+                                                                              "type": "object",
+                                                                              "additionalProperties":
+                                                                                  {"type": "number"}},
+                                                                          "interval": {
+                                                                              "type": "object",
+                                                                              "description": "null: every value "
+                                                                              "at this drive train fits worse than "
+                                                                              "the best at another (rejected)",
+                                                                              "additionalProperties": {
+                                                                                  "type": ["array", "null"],
+                                                                                  "items": _NUM,
+                                                                                  "minItems": 2, "maxItems": 2}},
+                                                                          "rejected": {
+                                                                              "type": "object",
+                                                                              "description": "per parameter: every "
+                                                                              "value at this drive train fits worse "
+                                                                              "than the best at the other",
+                                                                              "additionalProperties":
+                                                                                  {"type": "boolean"}},
+                                                                          "realisation_scatter_db": {
+                                                                              "type": "number"}}}},
                                                         "realisation_scatter_db": {
                                                             "type": ["number", "null"],
                                                             "description": "1-sigma of the error over "

@@ -12,7 +12,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from compare.chaos import REALISATION_STEP, Profile, profile_ladder, twin_params
+from compare.chaos import (REALISATION_STEP, Profile, hull_interval, interval_sigma, joint_selection,
+                           profile_ladder, twin_params)
 from compare.fitspace import fit_space
 from datagen.effects import get
 
@@ -68,6 +69,60 @@ def test_selection_constant_matches_the_normal_and_student_quantiles_and_dunnett
     assert selection_constant(10) == pytest.approx(2.42, abs=0.01)
     assert selection_constant(1) == 0.0
     assert selection_constant(27, dof=27) > selection_constant(27) > selection_constant(10)
+    # one degree of freedom: Student's t_0.95(1) = 6.314 for one comparison; for 27 values d exceeds 20, the
+    # former bracket of the root search (which raised there), and stays finite
+    assert selection_constant(2, dof=1) == pytest.approx(stats.t.ppf(0.95, 1), abs=1e-2)
+    assert 20.0 < selection_constant(27, dof=1) < 1e4
+
+
+def test_a_drive_train_the_measurement_rejects_does_not_widen_the_interval():
+    """compare.chaos.joint_selection (module docstring, "Nuisances"): three ladders of one parameter (pooled
+    scatter 0.1 dB, 2 realisations, 36 means, d for all of them). The model's drive train has
+    its valley at 2.0 dB, a second one a lower valley (1.5 dB) elsewhere, a third fits at 3.0 dB or worse
+    everywhere. Against the best over all three (1.5 dB; margin d * 0.1 * sqrt(2 / 2) ~ 0.3 dB) the model's
+    valley is rejected too, the third drive train altogether (None), and the hull is the second's interval.
+    Alone, each ladder would have been consistent around its own valley."""
+    from compare.chaos import pool_scatter
+
+    v = np.geomspace(1e-6, 1e-3, 12)
+    jitter = 0.1 * np.array([[(-1) ** i, (-1) ** (i + 1)] for i in range(12)])
+    a = 3.0 + jitter
+    a[3] = 2.0 + jitter[3]
+    b = 3.0 + jitter
+    b[7:9] = 1.5 + jitter[7:9]
+    c3 = 3.5 + jitter
+    c3[5] = 3.0 + jitter[5]
+    ladders = pool_scatter([Profile("backlash_m", v, e) for e in (a, b, c3)])
+    masks = joint_selection(ladders)
+    assert [m.sum() for m in masks] == [0, 2, 0]
+    ivs = [p.interval(m) for p, m in zip(ladders, masks)]
+    assert ivs == [None, (v[6], v[9]), None]
+    assert hull_interval(ivs) == (v[6], v[9])
+    assert ladders[0].interval() == (v[2], v[4])        # its own rule: around its own valley
+
+
+def test_ladders_of_several_drive_trains_share_one_pooled_realisation_scatter():
+    """compare.chaos.pool_scatter: a ladder with one chaotic value (1 degree of freedom: its own d is large and
+    bounds little) pooled with one of ten chaotic values: both get the variance over the eleven values
+    (by hand: the root of the mean of the per-value variances) and 11 degrees of freedom (d 2.84); the first
+    ladder's interval then closes around its valley."""
+    from compare.chaos import pool_scatter
+
+    v = np.geomspace(1e-6, 1e-3, 12)
+    a = np.full((12, 2), 3.0)                            # regular everywhere...
+    a[5] = [1.0, 1.2]                                    # ...but one chaotic valley
+    a[4] = a[6] = [2.0, 2.0]
+    b = 2.0 + 0.1 * np.array([[(-1) ** i, (-1) ** (i + 1)] for i in range(12)])
+    b[10:] = 2.5                                         # ten chaotic values, two regular
+    pa, pb = Profile("backlash_m", v, a), Profile("backlash_m", v, b)
+    # alone (k = 12, 1 degree of freedom: d 18.4 times its own 0.14 dB, sqrt(1/2) against a regular value):
+    # the regular neighbours 0.9 dB above the valley are admitted
+    assert pa.interval() == (v[3], v[7])
+    qa, qb = pool_scatter([pa, pb])
+    var = [np.var(r, ddof=1) for r in list(a[5:6]) + list(b[:10])]
+    assert qa.scatter_db == pytest.approx(np.sqrt(np.mean(var))) and qb.pooled == qa.pooled
+    assert qa.pooled[1] == 11
+    assert qa.interval() == (v[4], v[6])
 
 
 def test_interval_holds_the_lowest_expected_error_at_the_stated_rate():
@@ -131,6 +186,19 @@ def test_ladder_finds_a_valley_narrower_than_a_factor_two_between_rattle_regimes
     assert lo is not None and hi is not None and 20e-6 <= lo < best < hi <= 40e-6, (lo, hi)
 
 
+
+def test_a_chaotic_fit_interval_is_the_hull_over_drive_trains():
+    """compare.chaos.hull_interval: two drive trains whose ladders bound the parameter at [23, 39] um and at
+    [33 um, no bound] (the 50 um backlash example at the model's and at the rig's nuisances) give [23 um, no
+    bound]; closed ones give the outermost values; interval_sigma is a quarter of a closed hull, infinite for
+    an open one."""
+    assert hull_interval([(23e-6, 39e-6), (33e-6, None)]) == (23e-6, None)
+    assert hull_interval([(23e-6, 39e-6), (19e-6, 110e-6), (25e-6, 30e-6)]) == (19e-6, 110e-6)
+    assert hull_interval([(None, 39e-6), (33e-6, 50e-6)]) == (None, 50e-6)
+    assert interval_sigma((20e-6, 60e-6)) == pytest.approx(10e-6)
+    assert interval_sigma((20e-6, None)) == np.inf
+
+
 def _backlash_records(values):
     from compare.synthetic import HIDDEN_EXAMPLES
     from datagen.geometry import preset
@@ -192,9 +260,29 @@ def test_an_open_interval_is_written_to_json_and_html_as_unbounded():
 
     c = CandidateResult(effect="backlash", signature="", params={"backlash_m": 75e-6}, sigma={"backlash_m": np.inf},
                         error_db=1.0, baseline_error_db=2.0, view_error_db={}, window="whole record", n_evaluations=30,
-                        interval={"backlash_m": (20e-6, None)}, realisation_scatter_db=0.2)
+                        interval={"backlash_m": (20e-6, None)}, realisation_scatter_db=0.2,
+                        drivetrain_intervals=[{"drivetrain": {"mesh_damping_ratio": 0.07}, "best": {"backlash_m": 33e-6},
+                                               "best_error_db": {"backlash_m": 2.2},
+                                               "interval": {"backlash_m": (23e-6, 39e-6)},
+                                               "rejected": {"backlash_m": True}, "realisation_scatter_db": 0.23},
+                                              {"drivetrain": {"mesh_damping_ratio": 0.05}, "best": {"backlash_m": 55e-6},
+                                               "best_error_db": {"backlash_m": 1.2},
+                                               "interval": {"backlash_m": (20e-6, None)},
+                                               "rejected": {"backlash_m": False}, "realisation_scatter_db": 0.23},
+                                              {"drivetrain": {"mesh_damping_ratio": 0.1}, "best": {"backlash_m": 75e-6},
+                                               "best_error_db": {"backlash_m": 3.6}, "interval": {"backlash_m": None},
+                                               "rejected": {"backlash_m": True}, "realisation_scatter_db": 0.23}])
     d = c.to_dict()
     assert d["interval"] == {"backlash_m": [20e-6, None]} and d["sigma"] == {"backlash_m": None}
+    assert d["drivetrain_intervals"][1]["interval"] == {"backlash_m": [20e-6, None]}
+    assert d["drivetrain_intervals"][2]["interval"] == {"backlash_m": None}
     item = SCHEMA["properties"]["attribution"]["properties"]["candidates"]["items"]
     jsonschema.validate(d, item)
+    bad = dict(d, drivetrain_intervals=[{"drivetrain": {}, "best": {}}])      # the schema reads the entries
+    with pytest.raises(jsonschema.ValidationError):
+        jsonschema.validate(bad, item)
     assert describe_interval(d["interval"]["backlash_m"]) == " in [2e-05, no bound] (chaotic record)"
+    from compare.chaos import drivetrains_message
+
+    text = drivetrains_message("backlash", d["drivetrain_intervals"])
+    assert "in [2.3e-05, 3.9e-05]" in text and "in [2e-05, no bound]" in text and text.count("rejected") == 2

@@ -33,7 +33,7 @@ def register(sub) -> None:
 def run(args: argparse.Namespace) -> int:
     from compare.candidates import bound_note
     from compare.response import response_text
-    from compare.chaos import describe_interval
+    from compare.chaos import describe_interval, drivetrains_message
     from compare.ledger import history_table
     from compare.workflow import run as run_loop
 
@@ -66,6 +66,8 @@ def run(args: argparse.Namespace) -> int:
             print(f"  {cand.effect:20s} {100 * cand.reduction:6.1f} %  {ps}{mark}")
             if cand.response:
                 print(f"  {'':20s} {'':8s} {response_text(cand.response, cand.effect)}")
+            if cand.drivetrain_intervals:
+                print(f"  {'':20s} {'':8s} {drivetrains_message(cand.effect, cand.drivetrain_intervals)}")
         for u in out.attribution.unexplained:
             print(f"  unexplained by every registered effect: {u['text']}")
     print("ledger:")
