@@ -76,15 +76,56 @@ def _predict(S, B, bi, c, Y, dg_c, theta_c, x_static, z1, dynamic, i_phi1, n, dt
             Y[q] += sp * B[bi, p, q]
     phi = S[c, i_phi1] + dt * S[c, n + i_phi1] + 0.5 * dt * dt * S[c, 2 * n + i_phi1]
     x = z1[c] * (theta_c + dynamic[c] * phi) + (1.0 - dynamic[c]) * x_static[c]
-    pos = (x * ppc[c]) % nflt[c]                            # in [0, n): truncation is the floor
-    a = int(pos)
-    f = pos - a
-    if a > last[c]:
-        a = last[c]
-    b = a + 1
-    if b == nrec[c]:
-        b = 0
-    return Y[m1] + dg_c, Y[m1 + 1], a + offset[c], b + offset[c], f
+    return Y[m1] + dg_c, Y[m1 + 1], x * ppc[c]
+
+
+@njit(cache=True)
+def _window_ends(p, width, nflt, last, nrec, c):
+    """The window ``p +/- width / 2`` (record positions) of case ``c``: (lower index, fraction, upper index,
+    fraction, whole periods from the lower to the upper end), as :meth:`MeshRecords._window`."""
+    p_lo = (p - 0.5 * width) % nflt[c]
+    p_hi = p_lo + width
+    q_hi = np.floor(p_hi / nflt[c])
+    r_hi = p_hi - q_hi * nflt[c]
+    lo = int(p_lo)
+    if lo > last[c]:
+        lo = last[c]
+    hi = int(r_hi)
+    if hi > last[c]:
+        hi = last[c]
+    return lo, p_lo - lo, hi, r_hi - hi, q_hi
+
+
+@njit(cache=True)
+def _integral(tab, cum, i, f, q, c, nrec, offset, coff):
+    """Integral of case ``c``'s interpolated record ``tab`` from position 0 to index ``i`` + ``f`` plus ``q``
+    periods (``cum``: :func:`datagen.mesh_excitation._cumulative`)."""
+    a = i + offset[c]
+    b = (0 if i + 1 == nrec[c] else i + 1) + offset[c]
+    return q * cum[nrec[c] + coff[c]] + cum[i + coff[c]] + tab[a] * f + (tab[b] - tab[a]) * (0.5 * f * f)
+
+
+@njit(cache=True)
+def _window_mean(tab, cum, p, width, c, nflt, last, nrec, offset, coff):
+    """Mean of the interpolated record ``tab`` over the step's window (or its value at ``p`` for a zero
+    width): :meth:`datagen.mesh_excitation.MeshRecords.window_all_at`."""
+    if width <= 0.0:
+        pos = p % nflt[c]
+        a = int(pos)
+        if a > last[c]:
+            a = last[c]
+        f = pos - a
+        b = (0 if a + 1 == nrec[c] else a + 1) + offset[c]
+        return tab[a + offset[c]] * (1.0 - f) + tab[b] * f
+    lo, flo, hi, fhi, q = _window_ends(p, width, nflt, last, nrec, c)
+    return (_integral(tab, cum, hi, fhi, q, c, nrec, offset, coff)
+            - _integral(tab, cum, lo, flo, 0.0, c, nrec, offset, coff)) / width
+
+
+@njit(cache=True)
+def _window_mean_slot(tab, cum, s, p, width, c, nflt, last, nrec, offset, coff):
+    """:func:`_window_mean` of slot column ``s``."""
+    return _window_mean(tab[:, s], cum[:, s], p, width, c, nflt, last, nrec, offset, coff)
 
 
 @njit(cache=True)
@@ -98,18 +139,20 @@ def _advance(Y, G_jc, us_c, F, Sn_c, traj_jc):
 
 @njit(cache=True)
 def _march_linear(S, B, shared, G, dg, us, theta, x_static, z1, dynamic, i_phi1, n, dt,
-                  ppc, nflt, last, nrec, offset, k_tab, e_tab, c_m, sigma, traj, force):
-    """A chunk of steps with the linear law, solved in closed form."""
+                  ppc, nflt, last, nrec, offset, k_tab, e_tab, omega, coff, k_cum, e_cum, c_m, sigma, traj, force):
+    """A chunk of steps with the linear law, solved in closed form; the record is read as its mean over the
+    step's window (``omega``: the reference speed, rad/s)."""
     C, m1 = S.shape
     Y = np.empty(m1 + 2)
     Sn = np.empty((C, m1))
     two_dt = 2.0 / dt
     for j in range(G.shape[0]):
         for c in range(C):
-            d_lin, h, a, b, f = _predict(S, B, 0 if shared else c, c, Y, dg[j, c], theta[j, c], x_static, z1,
-                                         dynamic, i_phi1, n, dt, ppc, nflt, last, nrec, offset)
-            k = k_tab[a] * (1.0 - f) + k_tab[b] * f
-            e_force = e_tab[a] * (1.0 - f) + e_tab[b] * f
+            d_lin, h, p = _predict(S, B, 0 if shared else c, c, Y, dg[j, c], theta[j, c], x_static, z1,
+                                   dynamic, i_phi1, n, dt, ppc, nflt, last, nrec, offset)
+            width = z1[c] * omega[j, c] * dt * ppc[c]
+            k = _window_mean(k_tab, k_cum, p, width, c, nflt, last, nrec, offset, coff)
+            e_force = _window_mean(e_tab, e_cum, p, width, c, nflt, last, nrec, offset, coff)
             kappa = k + two_dt * c_m[c]
             t1 = c_m[c] * h + e_force
             delta = (d_lin + sigma[c] * t1) / (1.0 + sigma[c] * kappa)
@@ -121,9 +164,51 @@ def _march_linear(S, B, shared, G, dg, us, theta, x_static, z1, dynamic, i_phi1,
 
 
 @njit(cache=True)
+def _residual(law, p, x, d_lin, h, sig, two_dt, k, cm, e_force, ks, es):
+    F, dF, dFd = law(p, x, two_dt * x - h, k, cm, e_force, ks, es)
+    return x + sig * F - d_lin
+
+
+@njit(cache=True)
+def _bracketed_root(law, p, delta, d_lin, h, sig, two_dt, k, cm, e_force, ks, es, tol):
+    """:func:`datagen.newmark.bracketed_root` for one case: ``(delta, F)`` by doubling a search width to a sign
+    change of the residual and bisecting it; at a jump of the law over zero the force that closes the step.
+    Unchanged (and counted unconverged by the caller) if no bracket is found."""
+    if sig <= 0.0:
+        F, dF, dFd = law(p, delta, two_dt * delta - h, k, cm, e_force, ks, es)
+        return delta, F
+    r0 = _residual(law, p, delta, d_lin, h, sig, two_dt, k, cm, e_force, ks, es)
+    lo, hi, r_lo, r_hi = delta, delta, r0, r0
+    w = max(abs(delta), 1e-9) * 1e-6
+    for _ in range(60):
+        if r_lo > 0.0:
+            lo = delta - w
+            r_lo = _residual(law, p, lo, d_lin, h, sig, two_dt, k, cm, e_force, ks, es)
+        if r_hi < 0.0:
+            hi = delta + w
+            r_hi = _residual(law, p, hi, d_lin, h, sig, two_dt, k, cm, e_force, ks, es)
+        if r_lo <= 0.0 and r_hi >= 0.0:
+            break
+        w *= 2.0
+    if not (r_lo <= 0.0 and r_hi >= 0.0):
+        F, dF, dFd = law(p, delta, two_dt * delta - h, k, cm, e_force, ks, es)
+        return delta, F
+    for _ in range(80):
+        if hi - lo <= tol * (abs(lo) + 1e-9):
+            break
+        mid = 0.5 * (lo + hi)
+        if _residual(law, p, mid, d_lin, h, sig, two_dt, k, cm, e_force, ks, es) > 0.0:
+            hi = mid
+        else:
+            lo = mid
+    x = 0.5 * (lo + hi)
+    return x, (d_lin - x) / sig
+
+
+@njit(cache=True)
 def _march_law(law, S, B, shared, G, dg, us, theta, x_static, z1, dynamic, i_phi1, n, dt,
-               ppc, nflt, last, nrec, offset, k_tab, e_tab, k_slots, ef_slots, c_m, sigma,
-               law_row, P, tol, max_iter, traj, force):
+               ppc, nflt, last, nrec, offset, k_tab, e_tab, omega, coff, k_cum, e_cum, k_slots, ef_slots,
+               ks_cum, efs_cum, c_m, sigma, law_row, P, tol, max_iter, traj, force):
     """A chunk of steps with a nonlinear law ``law`` for the cases whose ``law_row >= 0`` (parameters
     ``P[law_row]``), solved by Newton per case as :func:`datagen.newmark.solve_mesh_law` does; the other cases in
     closed form. ``law`` is a :func:`scalar_law` (a function pointer), so this loop is compiled once and cached."""
@@ -137,11 +222,11 @@ def _march_law(law, S, B, shared, G, dg, us, theta, x_static, z1, dynamic, i_phi
     bad = 0
     for j in range(G.shape[0]):
         for c in range(C):
-            d_lin, h, a, b, f = _predict(S, B, 0 if shared else c, c, Y, dg[j, c], theta[j, c], x_static, z1,
-                                         dynamic, i_phi1, n, dt, ppc, nflt, last, nrec, offset)
-            g = 1.0 - f
-            k = k_tab[a] * g + k_tab[b] * f
-            e_force = e_tab[a] * g + e_tab[b] * f
+            d_lin, h, p = _predict(S, B, 0 if shared else c, c, Y, dg[j, c], theta[j, c], x_static, z1,
+                                   dynamic, i_phi1, n, dt, ppc, nflt, last, nrec, offset)
+            width = z1[c] * omega[j, c] * dt * ppc[c]
+            k = _window_mean(k_tab, k_cum, p, width, c, nflt, last, nrec, offset, coff)
+            e_force = _window_mean(e_tab, e_cum, p, width, c, nflt, last, nrec, offset, coff)
             sig, cm, r = sigma[c], c_m[c], law_row[c]
             if r < 0:
                 kappa = k + two_dt * cm
@@ -150,9 +235,9 @@ def _march_law(law, S, B, shared, G, dg, us, theta, x_static, z1, dynamic, i_phi
                 F = kappa * delta - t1
             else:
                 for s in range(n_slots):
-                    ks[s] = k_slots[a, s] * g + k_slots[b, s] * f
-                    ef = ef_slots[a, s] * g + ef_slots[b, s] * f        # MeshRecords.slots_at
-                    es[s] = ef / ks[s] if ks[s] > 0.0 else 0.0
+                    ks[s] = _window_mean_slot(k_slots, ks_cum, s, p, width, c, nflt, last, nrec, offset, coff)
+                    ef = _window_mean_slot(ef_slots, efs_cum, s, p, width, c, nflt, last, nrec, offset, coff)
+                    es[s] = ef / ks[s] if ks[s] > 0.0 else 0.0        # MeshRecords.window_all_at
                 delta = d_lin
                 done = False
                 F = 0.0
@@ -168,7 +253,10 @@ def _march_law(law, S, B, shared, G, dg, us, theta, x_static, z1, dynamic, i_phi
                 if not done:
                     F, dF, dFd = law(P[r], delta, two_dt * delta - h, k, cm, e_force, ks, es)
                     if abs(delta + sig * F - d_lin) > 1e3 * tol * (abs(delta) + 1e-9):
-                        bad += 1
+                        delta, F = _bracketed_root(law, P[r], delta, d_lin, h, sig, two_dt, k, cm, e_force, ks, es,
+                                                   tol)
+                        if abs(delta + sig * F - d_lin) > 1e3 * tol * (abs(delta) + 1e-9):
+                            bad += 1
             _advance(Y, G[j, c], us[c], F, Sn[c], traj[j, c])
             force[j, c] = F
         S[:, :] = Sn
@@ -196,7 +284,8 @@ class CompiledMesh:
     max_iter: int = 30
 
 
-def run_general(batch, S0: np.ndarray, n_steps: int, chunk: int, inputs, theta_of_chunk, mesh: CompiledMesh):
+def run_general(batch, S0: np.ndarray, n_steps: int, chunk: int, inputs, theta_of_chunk, mesh: CompiledMesh,
+                omega_of_chunk=None):
     """:func:`datagen.newmark.run_general` with the per-step work compiled; ``theta_of_chunk()`` gives the
     reference rotation (L, C) of the chunk ``inputs`` has just prepared. Yields the same
     ``(i0, traj, force, n_unconverged)``."""
@@ -212,15 +301,18 @@ def run_general(batch, S0: np.ndarray, n_steps: int, chunk: int, inputs, theta_o
         L = min(chunk, n_steps - i0)
         G, dg = inputs(i0, L, S)
         theta = np.ascontiguousarray(theta_of_chunk())
+        omega = np.ascontiguousarray(omega_of_chunk() if omega_of_chunk is not None else np.zeros_like(theta))
         traj = np.empty((L, C, m))
         force = np.empty((L, C))
         args = (S, B, batch.shared, np.ascontiguousarray(G), np.ascontiguousarray(dg), us, theta,
                 mesh.x_static, mesh.z1_per_rad, mesh.dynamic, mesh.i_phi1, n, float(batch.dt[0]),
-                rec.ppc, rec._n_float, rec._last, rec.n, rec.offset, rec.k, rec.error_force)
+                rec.ppc, rec._n_float, rec._last, rec.n, rec.offset, rec.k, rec.error_force, omega, rec.cum_offset,
+                rec.k_cum, rec.error_force_cum)
         if linear:
             bad = _march_linear(*args, mesh.c_m, batch.sigma, traj, force)
         else:
-            bad = _march_law(mesh.law, *args, rec.k_slots, rec.ef_slots, mesh.c_m, batch.sigma, mesh.law_row,
+            bad = _march_law(mesh.law, *args, rec.k_slots, rec.ef_slots, rec.k_slots_cum, rec.ef_slots_cum,
+                             mesh.c_m, batch.sigma, mesh.law_row,
                              mesh.law_params, mesh.tol, mesh.max_iter, traj, force)
         yield i0, traj, force, int(bad)
 

@@ -286,8 +286,10 @@ def solve_mesh_law(delta_lin, h, sigma, dt, law, *, tol=1e-12, max_iter=30):
     ``law(delta, delta_dot) -> (F, dF/d delta, dF/d delta_dot)``. Returns
     ``(delta, F, n_unconverged)``. Once every case's last step is below ``tol`` (relative), ``F`` at the final
     ``delta`` is the last evaluation moved along its tangent by that step (the law is not evaluated again: its
-    change over a step of 1e-12 relative is below rounding for any law with a bounded slope); otherwise the law is
-    evaluated there and the cases whose residual exceeds ``1e3 tol`` are counted as unconverged.
+    change over a step of 1e-12 relative is below rounding for any law with a bounded slope). A case Newton does
+    not settle (a law whose force jumps with ``delta``: the mesh damping of a dead zone acts only while a pair
+    touches, so the residual can jump over zero and Newton cycles between the two sides) is solved by
+    :func:`bracketed_root`; the cases whose residual still exceeds ``1e3 tol`` are counted as unconverged.
     """
     delta = delta_lin.copy()
     for _ in range(max_iter):
@@ -299,8 +301,61 @@ def solve_mesh_law(delta_lin, h, sigma, dt, law, *, tol=1e-12, max_iter=30):
         if (np.abs(step) <= tol * (np.abs(delta) + 1e-9)).all():
             return delta, F - slope * step, 0
     F, _, _ = law(delta, (2.0 / dt) * delta - h)
+    open_ = np.abs(delta + sigma * F - delta_lin) > 1e3 * tol * (np.abs(delta) + 1e-9)
+    if open_.any():
+        delta, F = bracketed_root(delta, F, open_, delta_lin, h, sigma, dt, law, tol=tol)
     bad = int((np.abs(delta + sigma * F - delta_lin) > 1e3 * tol * (np.abs(delta) + 1e-9)).sum())
     return delta, F, bad
+
+
+#: bracketed_root: doublings of the search width, and bisections (a bracket of width |delta| shrinks below 1e-12
+#: relative in 40)
+BRACKET_DOUBLINGS = 60
+BISECTIONS = 80
+
+
+def bracketed_root(delta, F, which, delta_lin, h, sigma, dt, law, *, tol=1e-12):
+    """The cases ``which`` of :func:`solve_mesh_law` that Newton did not settle, by bracketing and bisection.
+
+    The residual ``r(delta) = delta + sigma F - delta_lin`` grows with ``delta`` but for jumps of the law (a pair's
+    damping switching on as it touches), so a sign change is found by doubling a search width from ``delta``, then
+    bisected to ``tol``. Where the residual jumps over zero there is no root, and the step is taken at the jump
+    with the force ``(delta_lin - delta) / sigma``, which lies between the law's one-sided limits there (the
+    set-valued reading of a discontinuous law); where it is continuous that is its root. Returns ``(delta, F)``
+    with the other cases unchanged."""
+    delta, F = delta.copy(), F.copy()
+
+    def res(x):
+        return x + sigma * law(x, (2.0 / dt) * x - h)[0] - delta_lin
+
+    r0 = res(delta)
+    lo, hi = delta.copy(), delta.copy()
+    r_lo, r_hi = r0.copy(), r0.copy()
+    w = np.maximum(np.abs(delta), 1e-9) * 1e-6
+    for _ in range(BRACKET_DOUBLINGS):
+        need_lo, need_hi = which & (r_lo > 0), which & (r_hi < 0)
+        if not (need_lo.any() or need_hi.any()):
+            break
+        x = np.where(need_lo, delta - w, lo)
+        rx = res(x)
+        lo, r_lo = np.where(need_lo, x, lo), np.where(need_lo, rx, r_lo)
+        x = np.where(need_hi, delta + w, hi)
+        rx = res(x)
+        hi, r_hi = np.where(need_hi, x, hi), np.where(need_hi, rx, r_hi)
+        w = 2.0 * w
+    ok = which & (r_lo <= 0) & (r_hi >= 0) & (sigma > 0)
+    for _ in range(BISECTIONS):
+        if not ok.any() or (hi - lo <= tol * (np.abs(lo) + 1e-9))[ok].all():
+            break
+        mid = 0.5 * (lo + hi)
+        rm = res(mid)
+        up = ok & (rm > 0)
+        down = ok & ~up
+        hi, lo = np.where(up, mid, hi), np.where(down, mid, lo)
+    x = 0.5 * (lo + hi)
+    delta = np.where(ok, x, delta)
+    F = np.where(ok, (delta_lin - x) / np.where(sigma > 0, sigma, 1.0), F)
+    return delta, F
 
 
 def run_general(batch: Batch, S0: np.ndarray, n_steps: int, chunk: int, inputs, mesh_force):

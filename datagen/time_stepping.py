@@ -12,8 +12,13 @@ The reference rotation is ``theta_ref = integral of Omega_ref(t)`` (hook 5); its
 acceleration loads every rotating DOF with ``-M r dOmega_ref/dt`` (d'Alembert), the load torque
 follows hook 5, the motor feed-forward stays at the nominal torque (the speed controller supplies
 the rest). The mesh stiffness is read at the actual pinion angle ``theta_ref + phi_1``, with
-``phi_1`` predicted to the new step (``phi + dt phi' + dt^2/2 phi''``). A nonlinear mesh law is
-solved per step by Newton on the scalar mesh deflection (:func:`datagen.newmark.solve_mesh_law`).
+``phi_1`` predicted to the new step (``phi + dt phi' + dt^2/2 phi''``). The record is read as its mean over
+the window the step spans (``omega_ref dt`` of rotation: :meth:`datagen.mesh_excitation.MeshRecords.window_all_at`),
+not at one point: the step rate is not commensurate with the record's positions here (the periodic path's is),
+and a point read folded the record's content near multiples of the step rate into the band (stop 49,
+``experiments/step_convergence.py``). A nonlinear mesh law is
+solved per step by Newton on the scalar mesh deflection (:func:`datagen.newmark.solve_mesh_law`), with a
+bracketed fallback where the law's force jumps (a pair's damping switching on as it touches).
 The loop over the steps runs compiled (:mod:`datagen.compiled_stepping`) unless a mesh law of the batch has
 no compiled form; the numpy loop (:func:`datagen.newmark.run_general`) is kept as its reference.
 """
@@ -106,13 +111,14 @@ def transient_response(cases, R: int, n_discard: int) -> list[Response]:
         j = i % CHUNK
         phi_pred = S[:, i_phi1] + dt * S[:, n + i_phi1] + 0.5 * dt * dt * S[:, 2 * n + i_phi1]
         x = z1_per_rad * (theta_steps["theta"][j] + dynamic * phi_pred) + (1.0 - dynamic) * x_static
+        w = z1_per_rad * theta_steps["omega"][j] * dt        # mesh cycles the step spans (its window on the record)
         if not nonlinear:
-            k, E = records.at(x)
+            k, E = records.window_at(x, w)
             kappa = k + (2.0 / dt) * c_m
             t1 = c_m * h + E
             delta = (delta_lin + sig * t1) / (1.0 + sig * kappa)
             return delta, kappa * delta - t1, 0
-        k, E, ks, es = records.all_at(x)
+        k, E, ks, es = records.window_all_at(x, w)
         # each law's cases, cut once per step (not per Newton iteration)
         parts = [(cls.mesh_force_batch, idx, params, MeshState(k[idx], c_m[idx], E[idx], ks[idx], es[idx]))
                  for cls, idx, params in nonlinear]
@@ -148,7 +154,8 @@ def transient_response(cases, R: int, n_discard: int) -> list[Response]:
 
         mesh = compiled_stepping.CompiledMesh(records, z1_per_rad, dynamic, np.asarray(x_static, float), i_phi1,
                                               np.asarray(c_m, float), *law)
-        chunks = compiled_stepping.run_general(batch, S0, n_total, CHUNK, inputs, lambda: theta_steps["theta"], mesh)
+        chunks = compiled_stepping.run_general(batch, S0, n_total, CHUNK, inputs, lambda: theta_steps["theta"], mesh,
+                                              lambda: theta_steps["omega"])
     else:
         chunks = newmark.run_general(batch, S0, n_total, CHUNK, inputs, mesh_force)
     for i0, traj, force, bad in chunks:
