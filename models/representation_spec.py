@@ -49,6 +49,12 @@ class RepresentationSpec:
     reference : bool
         Read each record relative to its healthy reference (:mod:`models.representations`;
         ``order``, ``mesh_order``, ``tsa``); the records are then pairs.
+    integrate : int
+        ``tsa`` only: integrate the synchronous average this many times over the
+        pinion's angle (0, 1 or 2; order ``k`` divided by ``(i k)^n``, order 0
+        dropped). An accelerometer's record integrated twice is, below the
+        structural modes, the mesh force it hears: a pit's stiffness dip by its
+        area, not by the sharpness of its edges.
     whiten : bool
         ``tsa`` with ``reference`` only: divide every order of the record's TSA
         and of its residual by the reference's amplitude at the nearest mesh
@@ -69,6 +75,7 @@ class RepresentationSpec:
     remove_shaft_1x: bool = False
     reference: bool = False
     whiten: bool = False
+    integrate: int = 0
 
     def __post_init__(self):
         require(self.kind in KINDS, "representation.kind", self.kind, "one of: " + ", ".join(KINDS))
@@ -95,6 +102,10 @@ class RepresentationSpec:
                 f"false for representation {self.kind!r} (only " + ", ".join(REFERENCE_KINDS)
                 + " are read against a reference)")
 
+        require(isinstance(self.integrate, (int, np.integer)) and not isinstance(self.integrate, bool)
+                and 0 <= self.integrate <= 2, "representation.integrate", self.integrate, "an integer 0, 1 or 2")
+        require(self.integrate == 0 or self.kind == "tsa", "representation.integrate", self.integrate,
+                f"0 for representation {self.kind!r} (only 'tsa' is integrated over the angle)")
         require(isinstance(self.whiten, (bool, np.bool_)), "representation.whiten", self.whiten, "true or false")
         require(not self.whiten or (self.kind == "tsa" and self.reference), "representation.whiten", self.whiten,
                 "false unless kind = 'tsa' and reference = true (the whitening reads the reference's mesh harmonics)")

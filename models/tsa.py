@@ -78,8 +78,32 @@ def _comb_of_kept(dft: np.ndarray, bins: np.ndarray, k: int, gain: np.ndarray, n
     return comb
 
 
+def integrated(comb: np.ndarray, times: int) -> np.ndarray:
+    """The comb (last axis: integer shaft orders 0, 1, ...) of its angle-domain signal integrated ``times`` times
+    over the pinion's angle in radians: order ``k`` divided by ``(i k)^times``; orders 0-2 set to zero (the
+    integral's unknown constant, and the once- and twice-per-revolution content of the shafts' eccentricity and
+    cumulative pitch error, which the integration would raise above everything else; the difference signal drops
+    them too). ``times = 0``: the comb itself."""
+    if times == 0:
+        return comb
+    k = np.arange(comb.shape[-1], dtype=float)
+    factor = np.zeros(k.size, dtype=complex)
+    factor[INTEGRATED_FROM:] = (1j * k[INTEGRATED_FROM:]) ** (-times)
+    return comb * factor
+
+
+#: the lowest shaft order an integrated comb keeps (:func:`integrated`)
+INTEGRATED_FROM = 3
+
+
 def _tsa_comb(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, fr: float, starts, z_pinion: int,
               z_wheel: int = 0) -> np.ndarray:
+    """:func:`_filtered_comb`, integrated ``spec.integrate`` times over the angle (:func:`integrated`)."""
+    return integrated(_filtered_comb(x, spec, fs_hz, fr, starts, z_pinion, z_wheel), spec.integrate)
+
+
+def _filtered_comb(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, fr: float, starts, z_pinion: int,
+                   z_wheel: int = 0) -> np.ndarray:
     """The TSA comb of record ``x`` (pinion at ``fr`` Hz) for each start of ``starts``: the spectrum of the
     segment of whole revolutions at integer shaft orders 0 .. ``samples_per_rev // 2``, filtered as ``spec``
     says (high-pass, shaft lines removed, low-pass): ``(len(starts), samples_per_rev // 2 + 1)`` complex.
@@ -124,7 +148,7 @@ def _lines_comb(x: np.ndarray, spec: RepresentationSpec, fs_hz: float, fr: float
     n_seg, bins = _tsa_segment(x.size, spec, fs_hz, fr)
     k, gain = _kept_orders(spec, bins.size, z_pinion)
     dft = lines_dft_at(shaft_line_fit(x, fs_hz, freqs), freqs, fs_hz, n_seg, _needed_bins(bins[:k]))
-    return _comb_of_kept(dft, bins, k, gain, n_seg)
+    return integrated(_comb_of_kept(dft, bins, k, gain, n_seg), spec.integrate)
 
 
 def _tsa_channels(comb: np.ndarray, samples_per_rev: int, z_pinion: int) -> tuple[np.ndarray, np.ndarray]:

@@ -112,6 +112,37 @@ def test_tsa_lowpass_keeps_orders_below_the_cutoff_and_removes_those_above():
                                     z_pinion=z))
 
 
+def test_tsa_integrated_twice_is_the_angle_integral_of_the_synchronous_average():
+    """integrate = 2: the record's orders 5, 13 (mesh, z = 13) and 23 come out divided by -(k^2) (the second
+    integral over the angle of cos(k theta + p) is -cos(k theta + p) / k^2, calculus); orders 1-2 dropped (the
+    shafts' once- and twice-per-revolution content the integration would raise above the rest). The difference
+    channel is the integrated order-5 and order-23 content (mesh harmonic and its first sidebands dropped as in
+    Lebold et al. 2000). atol 1e-9 of the TSA scale."""
+    fs, fr, z = 4096.0, 16.0, 13
+    t = np.arange(4096) / fs
+    parts = {1: 4.0, 2: 2.0, 5: 1.0, 13: 3.0, 23: 0.5}
+    x = sum(a * np.cos(2 * np.pi * k * fr * t + 0.2 * k) for k, a in parts.items())
+    spec = RepresentationSpec(kind="tsa", n_revs=16, samples_per_rev=256, integrate=2)
+    r = represent(x[None, :], spec, fs_hz=fs, shaft_hz=fr, z_pinion=z)[0]
+    theta = 2 * np.pi * np.arange(256) / 256
+    expect = {k: -a * np.cos(k * theta + 0.2 * k) / k ** 2 for k, a in parts.items() if k > 2}
+    avg = sum(expect.values())
+    np.testing.assert_allclose(r[0], avg / avg.std(), atol=1e-9)
+    np.testing.assert_allclose(r[1], (expect[5] + expect[23]) / avg.std(), atol=1e-9)
+    # once integrated: order k divided by i k, i.e. cos -> sin / k
+    r1 = represent(x[None, :], replace(spec, integrate=1), fs_hz=fs, shaft_hz=fr, z_pinion=z)[0]
+    once = sum(a * np.sin(k * theta + 0.2 * k) / k for k, a in parts.items() if k > 2)
+    np.testing.assert_allclose(r1[0], once / once.std(), atol=1e-9)
+
+
+@pytest.mark.parametrize("kind,value", [("tsa", 3), ("tsa", -1), ("tsa", 1.5), ("tsa", True), ("order", 2)])
+def test_tsa_integration_bad_values_are_refused(kind, value):
+    """integrate outside 0-2, not an integer, or on a representation other than the TSA: InputError naming the
+    field."""
+    with pytest.raises(InputError, match="integrate"):
+        RepresentationSpec(kind=kind, integrate=value)
+
+
 def _encoder_like_record(fs=4096.0, fr=16.0, n=8192):
     """Pinion order 1 (10 units) + wheel order 1 at pinion order 29/100 (30 units) + order 7 (1 unit): what a
     transmission error measured with eccentric encoders looks like to a tooth-fault detector."""
