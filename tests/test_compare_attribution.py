@@ -304,13 +304,18 @@ def test_sigma_is_the_least_squares_spread():
 def test_a_healthy_rig_at_3000_rpm_claims_nothing():
     """The false claim model_error_db removes, end to end (spur-gds, 3000 rpm, 100 N m, 1 s, nuisances off the
     defaults): a speed fluctuation at 85 Hz used to be claimed against the coarse time-stepped baseline. The two
-    fluctuations are the candidates (the time-stepped path); nothing is claimed, and the time-stepped baseline
-    is indeed above the comparison's (the solvers' disagreement the rule guards against)."""
+    fluctuations are the candidates (the time-stepped path); nothing is claimed. And the time-stepped baseline
+    now agrees with the periodic comparison: both simulate the same linear model, and since the time-stepped
+    path reads the mesh record as its mean over each step (datagen.mesh_excitation.MeshRecords.window_all_at)
+    it no longer carries the step-beat lines that put it 1.49 dB against the comparison's 0.45 dB here (the
+    disagreement the rule guarded against; the fluctuations then took 75 and 64 % of it, now 26 and 4 %).
+    Tolerance 0.3 dB: the noise error of such a record is ~0.9 dB, its scatter a few tenths."""
     m = rig_measurement((), speed_rpm=3000.0, torque_nm=100.0, fs_hz=20000.0, duration_s=1.0)
     _, c, a = _attribute(m, candidates=["speed_fluctuation", "torque_fluctuation"], calibrate=False)
     assert not a.claimed, [(x.effect, x.reduction, x.error_db, x.model_error_db) for x in a.candidates]
     best = a.candidates[0]
-    assert best.baseline_error_db > 2 * c.evaluation.residuals.excess_total_db, (best.baseline_error_db,)
+    assert best.baseline_error_db <= c.evaluation.residuals.excess_total_db + 0.3, (
+        best.baseline_error_db, c.evaluation.residuals.excess_total_db)
 
 
 @pytest.mark.slow
