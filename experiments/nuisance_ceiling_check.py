@@ -24,7 +24,6 @@ import argparse
 import copy
 import json
 import sys
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -92,29 +91,20 @@ def main(argv=None) -> dict:
                     help="CNN variants trained on each dataset")
     ap.add_argument("--workers", type=int, default=2)
     args = ap.parse_args(argv)
-    from datagen.generate import generate
-    from datagen.sweep import sweep_from_dict
-    from gearpit.tomlio import read_toml
-    from models.train import stratified_split
 
     names = args.only or list(VARIANTS)
     cr.OUT = OUT
     rows = {}
     for name in names:
-        data_dir = OUT / name
-        for part in ("default", "default_healthy"):
-            if not (data_dir / part / "index.parquet").is_file():
-                doc = narrowed(dict(read_toml(cr.SWEEPS / f"{part}.toml")), VARIANTS[name])
-                doc["sweep"] = dict(doc["sweep"], channels=["acc_pinion_loa_m_s2"],
-                                    samples_per_class=doc["sweep"]["samples_per_class"] * RECORDS.get(name, 1))
-                t0 = time.perf_counter()
-                generate(sweep_from_dict(doc), data_dir / part, workers=args.workers, progress=False)
-                cr.log(f"{name}: generated {part} in {time.perf_counter() - t0:.0f} s")
-        data = cr.dataset("default", data_dir)
-        tr, te = stratified_split(cr.strata(data), 0.3, cr.SEED)
-        train, test = data.subset(tr), data.subset(te)
+
+        def edit(doc, name=name):
+            doc = narrowed(doc, VARIANTS[name])
+            return {**doc, "sweep": dict(doc["sweep"],
+                                         samples_per_class=doc["sweep"]["samples_per_class"] * RECORDS.get(name, 1))}
+
+        train, test = cr.edited_default_split(OUT / name, edit, args.workers, name)
         for cnn in args.cnn:
-            r = cr.cnn_run(train, {"test": test}, cnn, data_dir / cnn, variants=cnn_variants())
+            r = cr.cnn_run(train, {"test": test}, cnn, OUT / name / cnn, variants=cnn_variants())
             rows[f"{name}/{cnn}"] = {
                 "dataset": name, "cnn": cnn, "severity_accuracy": r["test"]["accuracy"],
                 "teeth_accuracy": r["test"]["teeth_accuracy"], "severity_mae": r["test"]["severity_mae"],

@@ -18,7 +18,6 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -37,28 +36,16 @@ def main(argv=None) -> dict:
                     help="TSA points per pinion revolution (the protocol uses 1024)")
     ap.add_argument("--workers", type=int, default=2)
     args = ap.parse_args(argv)
-    from datagen.generate import generate
-    from datagen.sweep import sweep_from_dict
     from gearpit.errors import require
-    from gearpit.tomlio import read_toml
     from models.representation_spec import RepresentationSpec
-    from models.train import stratified_split
 
     require(4000.0 <= args.fs <= 200000.0, "--fs", args.fs, "4000-200000 Hz")
     for n in args.samples_per_rev:
         require(64 <= n <= 16384, "--samples-per-rev", n, "64-16384")
     data_dir = OUT / f"fs{int(args.fs)}"
     cr.OUT = OUT
-    for part in ("default", "default_healthy"):
-        if not (data_dir / part / "index.parquet").is_file():
-            doc = dict(read_toml(cr.SWEEPS / f"{part}.toml"))
-            doc["sweep"] = dict(doc["sweep"], fs_hz=args.fs, channels=["acc_pinion_loa_m_s2"])
-            t0 = time.perf_counter()
-            generate(sweep_from_dict(doc), data_dir / part, workers=args.workers, progress=False)
-            cr.log(f"generated {part} at {args.fs:g} Hz in {time.perf_counter() - t0:.0f} s")
-    data = cr.dataset("default", data_dir)
-    tr, te = stratified_split(cr.strata(data), 0.3, cr.SEED)
-    train, test = data.subset(tr), data.subset(te)
+    train, test = cr.edited_default_split(
+        data_dir, lambda doc: {**doc, "sweep": dict(doc["sweep"], fs_hz=args.fs)}, args.workers, f"{args.fs:g} Hz")
     rows = {}
     for n in args.samples_per_rev:
         variants = {"tsa_op": (RepresentationSpec(kind="tsa", n_revs=8, samples_per_rev=n), cr.OPERATING)}

@@ -51,10 +51,12 @@ class RepresentationSpec:
         ``order``, ``mesh_order``, ``tsa``); the records are then pairs.
     integrate : int
         ``tsa`` only: integrate the synchronous average this many times over the
-        pinion's angle (0, 1 or 2; order ``k`` divided by ``(i k)^n``, order 0
-        dropped). An accelerometer's record integrated twice is, below the
-        structural modes, the mesh force it hears: a pit's stiffness dip by its
-        area, not by the sharpness of its edges.
+        pinion's angle (0, 1 or 2; order ``k`` divided by ``(i k)^n``, orders 0-2
+        dropped: :func:`models.tsa.integrated`). An accelerometer's record
+        integrated twice undoes the acceleration's weighting by the frequency
+        squared, which favours the sharpness of a pit's stiffness dip over its
+        area; on the accelerometer it did not lift the severity accuracy
+        (experiments/RESULTS.md, "Taking the nuisances away"). Off by default.
     whiten : bool
         ``tsa`` with ``reference`` only: divide every order of the record's TSA
         and of its residual by the reference's amplitude at the nearest mesh
