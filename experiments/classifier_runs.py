@@ -151,14 +151,15 @@ def save_run(path: Path, metrics: dict, pred, data: SignalSet, title: str) -> No
 
 def cnn_run(train: SignalSet, tests: dict[str, SignalSet], variant: str, where: Path, *,
             task: str = "multi", augment: AugmentConfig | None = None, allow_mismatch: bool = False,
-            variants: dict | None = None) -> dict:
+            variants: dict | None = None, seed: int = SEED) -> dict:
     """Train the CNN ``variant`` (of ``variants``, default :data:`VARIANTS`: name -> (representation, side
-    inputs); an unknown name is the mesh-order CNN) on ``train``, evaluate it on each of ``tests``."""
+    inputs); an unknown name is the mesh-order CNN) on ``train`` with training seed ``seed``, evaluate it on each
+    of ``tests``."""
     variants = VARIANTS if variants is None else variants
     rep, operating = variants[variant] if variant in variants else (MESH_ORDER, ())
     # the epoch limit and early stopping end every run, not the wall-time budget: on a loaded machine the
     # default 900 s budget cut the 2 s one-rig runs short, which made the numbers depend on the load
-    cfg = TrainConfig(representation=rep, task=task, augment=augment or AugmentConfig(), seed=SEED,
+    cfg = TrainConfig(representation=rep, task=task, augment=augment or AugmentConfig(), seed=seed,
                       operating_inputs=operating, max_seconds=MAX_SECONDS)
     key = f"{where.relative_to(OUT)}#{variant}"
     old = REUSE.get(key)

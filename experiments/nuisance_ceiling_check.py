@@ -89,6 +89,7 @@ def main(argv=None) -> dict:
     ap.add_argument("--only", nargs="+", choices=sorted(VARIANTS), default=None, help="these variants only")
     ap.add_argument("--cnn", nargs="+", default=["tsa_op"], choices=sorted(cnn_variants()),
                     help="CNN variants trained on each dataset")
+    ap.add_argument("--training-seed", type=int, default=0, help="the CNN's training seed (the protocol's: 0)")
     ap.add_argument("--workers", type=int, default=2)
     args = ap.parse_args(argv)
 
@@ -104,18 +105,21 @@ def main(argv=None) -> dict:
 
         train, test = cr.edited_default_split(OUT / name, edit, args.workers, name)
         for cnn in args.cnn:
-            r = cr.cnn_run(train, {"test": test}, cnn, OUT / name / cnn, variants=cnn_variants())
-            rows[f"{name}/{cnn}"] = {
-                "dataset": name, "cnn": cnn, "severity_accuracy": r["test"]["accuracy"],
+            run = cnn if args.training_seed == 0 else f"{cnn}_seed{args.training_seed}"
+            r = cr.cnn_run(train, {"test": test}, cnn, OUT / name / run, variants=cnn_variants(),
+                           seed=args.training_seed)
+            rows[f"{name}/{run}"] = {
+                "dataset": name, "cnn": cnn, "training_seed": args.training_seed,
+                "severity_accuracy": r["test"]["accuracy"],
                 "teeth_accuracy": r["test"]["teeth_accuracy"], "severity_mae": r["test"]["severity_mae"],
                 "epochs": r["epochs"], "train_seconds": r["train_seconds"], "n_train": len(train), "n_test": len(test)}
             cr.log(f"{name}, {cnn}: severity {100 * r['test']['accuracy']:.1f} %, "
                    f"teeth {100 * r['test']['teeth_accuracy']:.1f} %")
-    print("\n| dataset | narrowed draws | CNN | severity acc. % | teeth acc. % | epochs | training (s) |")
-    print("|---|---|---|---|---|---|---|")
+    print("\n| dataset | narrowed draws | CNN | training seed | severity acc. % | teeth acc. % | epochs | training (s) |")
+    print("|---|---|---|---|---|---|---|---|")
     for r in rows.values():
         what = ", ".join(".".join(p[1:]) for p in VARIANTS[r["dataset"]]) or "none"
-        print(f"| {r['dataset']} | {what} | {r['cnn']} | {100 * r['severity_accuracy']:.1f} | "
+        print(f"| {r['dataset']} | {what} | {r['cnn']} | {r['training_seed']} | {100 * r['severity_accuracy']:.1f} | "
               f"{100 * r['teeth_accuracy']:.1f} | {r['epochs']} | {r['train_seconds']:.0f} |")
     out = {"variants": {n: {".".join(p): v for p, v in VARIANTS[n].items()} for n in names}, "runs": rows}
     print(json.dumps(out))
