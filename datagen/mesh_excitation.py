@@ -281,16 +281,11 @@ class MeshRecords:
         0.15: lines at mesh harmonics + 5 x fr, 84 dB above the fine step's). The average over the step is the
         step's own box filter: zero at every multiple of the step rate, so what folds close to 0 Hz is cut
         (experiments/step_convergence.py)."""
+        k, e = self.window_at(x_cycles, w_cycles)
         a, b, f = self._index(x_cycles)
         lo, q, flo, hi, qh, fhi, width = self._window(x_cycles, w_cycles)
         point = width <= 0
         args = (lo, q, flo, hi, qh, fhi, width)
-        k = np.where(point, self.k[a] * (1 - f) + self.k[b] * f, _window_mean(self.k, self.k_cum, self, *args))
-        if self.has_error:
-            e = np.where(point, self.error_force[a] * (1 - f) + self.error_force[b] * f,
-                         _window_mean(self.error_force, self.error_force_cum, self, *args))
-        else:
-            e = np.zeros_like(k)
         ks = _window_mean(self.k_slots, self.k_slots_cum, self, *args, slots=True)
         efs = _window_mean(self.ef_slots, self.ef_slots_cum, self, *args, slots=True)
         if point.any():
