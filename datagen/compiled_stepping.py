@@ -81,8 +81,16 @@ def _predict(S, B, bi, c, Y, dg_c, theta_c, x_static, z1, dynamic, i_phi1, n, dt
 
 @njit(cache=True)
 def _window_ends(p, width, nflt, last, nrec, c):
-    """The window ``p +/- width / 2`` (record positions) of case ``c``: (lower index, fraction, upper index,
-    fraction, whole periods from the lower to the upper end), as :meth:`MeshRecords._window`."""
+    """Where the step's window ``p +/- width / 2`` (record positions) of case ``c`` falls, computed once per step
+    and case for every record read from it: (lower index, fraction, upper index, fraction, whole periods from the
+    lower to the upper end), as :meth:`MeshRecords._window`; for a zero width the point ``p`` as (index,
+    fraction, -1, 0, 0)."""
+    if width <= 0.0:
+        pos = p % nflt[c]
+        a = int(pos)
+        if a > last[c]:
+            a = last[c]
+        return a, pos - a, -1, 0.0, 0.0
     p_lo = (p - 0.5 * width) % nflt[c]
     p_hi = p_lo + width
     q_hi = np.floor(p_hi / nflt[c])
@@ -106,26 +114,15 @@ def _integral(tab, cum, i, f, q, c, nrec, offset, coff):
 
 
 @njit(cache=True)
-def _window_mean(tab, cum, p, width, c, nflt, last, nrec, offset, coff):
-    """Mean of the interpolated record ``tab`` over the step's window (or its value at ``p`` for a zero
-    width): :meth:`datagen.mesh_excitation.MeshRecords.window_all_at`."""
+def _window_mean(tab, cum, ends, width, c, nrec, offset, coff):
+    """Mean of the interpolated record ``tab`` over the step's window whose :func:`_window_ends` are ``ends`` (or
+    its value at the point for a zero width): :meth:`datagen.mesh_excitation.MeshRecords.window_all_at`."""
+    lo, flo, hi, fhi, q = ends
     if width <= 0.0:
-        pos = p % nflt[c]
-        a = int(pos)
-        if a > last[c]:
-            a = last[c]
-        f = pos - a
-        b = (0 if a + 1 == nrec[c] else a + 1) + offset[c]
-        return tab[a + offset[c]] * (1.0 - f) + tab[b] * f
-    lo, flo, hi, fhi, q = _window_ends(p, width, nflt, last, nrec, c)
+        b = (0 if lo + 1 == nrec[c] else lo + 1) + offset[c]
+        return tab[lo + offset[c]] * (1.0 - flo) + tab[b] * flo
     return (_integral(tab, cum, hi, fhi, q, c, nrec, offset, coff)
             - _integral(tab, cum, lo, flo, 0.0, c, nrec, offset, coff)) / width
-
-
-@njit(cache=True)
-def _window_mean_slot(tab, cum, s, p, width, c, nflt, last, nrec, offset, coff):
-    """:func:`_window_mean` of slot column ``s``."""
-    return _window_mean(tab[:, s], cum[:, s], p, width, c, nflt, last, nrec, offset, coff)
 
 
 @njit(cache=True)
@@ -151,8 +148,9 @@ def _march_linear(S, B, shared, G, dg, us, theta, x_static, z1, dynamic, i_phi1,
             d_lin, h, p = _predict(S, B, 0 if shared else c, c, Y, dg[j, c], theta[j, c], x_static, z1,
                                    dynamic, i_phi1, n, dt, ppc, nflt, last, nrec, offset)
             width = z1[c] * omega[j, c] * dt * ppc[c]
-            k = _window_mean(k_tab, k_cum, p, width, c, nflt, last, nrec, offset, coff)
-            e_force = _window_mean(e_tab, e_cum, p, width, c, nflt, last, nrec, offset, coff)
+            ends = _window_ends(p, width, nflt, last, nrec, c)
+            k = _window_mean(k_tab, k_cum, ends, width, c, nrec, offset, coff)
+            e_force = _window_mean(e_tab, e_cum, ends, width, c, nrec, offset, coff)
             kappa = k + two_dt * c_m[c]
             t1 = c_m[c] * h + e_force
             delta = (d_lin + sigma[c] * t1) / (1.0 + sigma[c] * kappa)
@@ -225,8 +223,9 @@ def _march_law(law, S, B, shared, G, dg, us, theta, x_static, z1, dynamic, i_phi
             d_lin, h, p = _predict(S, B, 0 if shared else c, c, Y, dg[j, c], theta[j, c], x_static, z1,
                                    dynamic, i_phi1, n, dt, ppc, nflt, last, nrec, offset)
             width = z1[c] * omega[j, c] * dt * ppc[c]
-            k = _window_mean(k_tab, k_cum, p, width, c, nflt, last, nrec, offset, coff)
-            e_force = _window_mean(e_tab, e_cum, p, width, c, nflt, last, nrec, offset, coff)
+            ends = _window_ends(p, width, nflt, last, nrec, c)
+            k = _window_mean(k_tab, k_cum, ends, width, c, nrec, offset, coff)
+            e_force = _window_mean(e_tab, e_cum, ends, width, c, nrec, offset, coff)
             sig, cm, r = sigma[c], c_m[c], law_row[c]
             if r < 0:
                 kappa = k + two_dt * cm
@@ -235,8 +234,8 @@ def _march_law(law, S, B, shared, G, dg, us, theta, x_static, z1, dynamic, i_phi
                 F = kappa * delta - t1
             else:
                 for s in range(n_slots):
-                    ks[s] = _window_mean_slot(k_slots, ks_cum, s, p, width, c, nflt, last, nrec, offset, coff)
-                    ef = _window_mean_slot(ef_slots, efs_cum, s, p, width, c, nflt, last, nrec, offset, coff)
+                    ks[s] = _window_mean(k_slots[:, s], ks_cum[:, s], ends, width, c, nrec, offset, coff)
+                    ef = _window_mean(ef_slots[:, s], efs_cum[:, s], ends, width, c, nrec, offset, coff)
                     es[s] = ef / ks[s] if ks[s] > 0.0 else 0.0        # MeshRecords.window_all_at
                 delta = d_lin
                 done = False
