@@ -61,9 +61,11 @@ def linear_law(p, delta, delta_dot, k, c, e_force, k_slots, e_slots):
 
 
 @njit(cache=True)
-def _predict(S, B, bi, c, Y, dg_c, theta_c, x_static, z1, dynamic, i_phi1, n, dt, ppc, nflt, last, nrec, offset):
-    """``Y = s_c @ B~`` (next state, ``d_lin``, ``h``) and the mesh position at the new step of case ``c``:
-    returns ``(d_lin, h, a, b, f)``, the record rows on either side of it and the fraction between them."""
+def _predict(S, B, bi, c, Y, dg_c, theta_c, omega_c, x_static, z1, dynamic, i_phi1, n, dt, ppc, nflt, last, nrec,
+             offset, coff, k_tab, k_cum, e_tab, e_cum):
+    """``Y = s_c @ B~`` (next state, ``d_lin``, ``h``) and the mesh record of case ``c`` at the new step, read as its
+    mean over the step's window (``omega_c``: the reference speed, rad/s): returns ``(d_lin, h, ends, width, k,
+    e_force)``, the window's :func:`_window_ends` and width (record positions) for the pairs' slots."""
     m1 = S.shape[1]
     # row by row, so the inner loop runs along B's contiguous rows (vectorised); each Y[q] still sums over p in
     # order from 0.0, the same additions as the column-wise dot products before (bit-equal, 1.6x faster march)
@@ -76,7 +78,11 @@ def _predict(S, B, bi, c, Y, dg_c, theta_c, x_static, z1, dynamic, i_phi1, n, dt
             Y[q] += sp * B[bi, p, q]
     phi = S[c, i_phi1] + dt * S[c, n + i_phi1] + 0.5 * dt * dt * S[c, 2 * n + i_phi1]
     x = z1[c] * (theta_c + dynamic[c] * phi) + (1.0 - dynamic[c]) * x_static[c]
-    return Y[m1] + dg_c, Y[m1 + 1], x * ppc[c]
+    width = z1[c] * omega_c * dt * ppc[c]
+    ends = _window_ends(x * ppc[c], width, nflt, last, nrec, c)
+    k = _window_mean(k_tab, k_cum, ends, width, c, nrec, offset, coff)
+    e_force = _window_mean(e_tab, e_cum, ends, width, c, nrec, offset, coff)
+    return Y[m1] + dg_c, Y[m1 + 1], ends, width, k, e_force
 
 
 @njit(cache=True)
@@ -145,12 +151,9 @@ def _march_linear(S, B, shared, G, dg, us, theta, x_static, z1, dynamic, i_phi1,
     two_dt = 2.0 / dt
     for j in range(G.shape[0]):
         for c in range(C):
-            d_lin, h, p = _predict(S, B, 0 if shared else c, c, Y, dg[j, c], theta[j, c], x_static, z1,
-                                   dynamic, i_phi1, n, dt, ppc, nflt, last, nrec, offset)
-            width = z1[c] * omega[j, c] * dt * ppc[c]
-            ends = _window_ends(p, width, nflt, last, nrec, c)
-            k = _window_mean(k_tab, k_cum, ends, width, c, nrec, offset, coff)
-            e_force = _window_mean(e_tab, e_cum, ends, width, c, nrec, offset, coff)
+            d_lin, h, ends, width, k, e_force = _predict(
+                S, B, 0 if shared else c, c, Y, dg[j, c], theta[j, c], omega[j, c], x_static, z1, dynamic, i_phi1,
+                n, dt, ppc, nflt, last, nrec, offset, coff, k_tab, k_cum, e_tab, e_cum)
             kappa = k + two_dt * c_m[c]
             t1 = c_m[c] * h + e_force
             delta = (d_lin + sigma[c] * t1) / (1.0 + sigma[c] * kappa)
@@ -220,12 +223,9 @@ def _march_law(law, S, B, shared, G, dg, us, theta, x_static, z1, dynamic, i_phi
     bad = 0
     for j in range(G.shape[0]):
         for c in range(C):
-            d_lin, h, p = _predict(S, B, 0 if shared else c, c, Y, dg[j, c], theta[j, c], x_static, z1,
-                                   dynamic, i_phi1, n, dt, ppc, nflt, last, nrec, offset)
-            width = z1[c] * omega[j, c] * dt * ppc[c]
-            ends = _window_ends(p, width, nflt, last, nrec, c)
-            k = _window_mean(k_tab, k_cum, ends, width, c, nrec, offset, coff)
-            e_force = _window_mean(e_tab, e_cum, ends, width, c, nrec, offset, coff)
+            d_lin, h, ends, width, k, e_force = _predict(
+                S, B, 0 if shared else c, c, Y, dg[j, c], theta[j, c], omega[j, c], x_static, z1, dynamic, i_phi1,
+                n, dt, ppc, nflt, last, nrec, offset, coff, k_tab, k_cum, e_tab, e_cum)
             sig, cm, r = sigma[c], c_m[c], law_row[c]
             if r < 0:
                 kappa = k + two_dt * cm
