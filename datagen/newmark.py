@@ -186,6 +186,26 @@ class Batch:
             G = np.concatenate([G, np.zeros(G.shape[:-1] + (1,))], axis=-1)
         return G, np.einsum("...cn,cn->...c", f, self.u)
 
+    def forcing_basis(self, basis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The state changes and ``d_lin`` shares of the forcing vectors ``basis`` (C, r, n): (C, r, 3n), (C, r),
+        for :meth:`forcing_combined`."""
+        return np.matmul(basis, self.force_state), np.einsum("crn,cn->cr", basis, self.u)
+
+    def forcing_combined(self, coef: np.ndarray, basis_terms: tuple) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`forcing` of ``f[l, c] = sum_r coef[l, c, r] basis[c, r]`` (coef (L, C, r)), from
+        ``basis_terms = forcing_basis(basis)``: r products per step instead of n.
+
+        Why: the time-stepped path's forcing is the motor torque, the load torque and the reference
+        acceleration's inertia forces, three vectors per case with time-varying weights; the product with all n
+        components was a fifth of a time-stepped batch's own work (profile of a hidden pitch error on a helical
+        rig, experiments/bench_compare.py). Equal to :meth:`forcing` of the assembled ``f`` to rounding."""
+        P, pu = basis_terms
+        L, C, r = coef.shape
+        G = np.empty((L, C, P.shape[2] + 1))
+        G[..., :-1] = np.matmul(coef.transpose(1, 0, 2), P).transpose(1, 0, 2)
+        G[..., -1] = 0.0
+        return G, np.einsum("lcr,cr->lc", coef, pu)
+
 
 def run_linear(batch: Batch, S0: np.ndarray, k: np.ndarray, c: np.ndarray, E: np.ndarray | None,
                force_scale: np.ndarray, *, store: bool, store_shift: int = 0, groups: int | None = None,

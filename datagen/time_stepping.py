@@ -82,6 +82,11 @@ def transient_response(cases, R: int, n_discard: int) -> list[Response]:
                 w[:, j], T[:, j] = 2 * np.pi * np.asarray(s) / 60.0, tq
         return w, T
 
+    basis = np.zeros((C, 3, n))
+    basis[:, 0, i_phim] = motor_torque
+    basis[:, 1, i_phib] = load_per_torque
+    basis[:, 2] = -M_ratio
+    basis_terms = batch.forcing_basis(basis)
     # reference angle bookkeeping (theta_ref at the last completed step)
     state = {"theta": np.zeros(C), "omega_prev": operating(np.zeros(1))[0][0]}
     theta_steps = {}
@@ -96,14 +101,20 @@ def transient_response(cases, R: int, n_discard: int) -> list[Response]:
         theta = state["theta"] + np.cumsum(0.5 * dt * (prev + w), axis=0)
         state["theta"], state["omega_prev"] = theta[-1], w[-1]
         theta_steps["theta"], theta_steps["omega"] = theta, w
-        f = np.zeros((L, C, n))
-        f[..., i_phim] = motor_torque
-        f[..., i_phib] = load_per_torque * T
-        f -= wdot[..., None] * M_ratio[None]
-        for j, fx in enumerate(forcing_fx):
-            for e in fx:
-                f[:, j, :] += e.generalized_force(t, theta[:, j], theta[:, j] * ratio2[j], cases[j].ctx)
-        return batch.forcing(f)
+        # f = motor torque e_m + load e_b T - wdot M_ratio (+ the effects' generalised forces)
+        coef = np.empty((L, C, 3))
+        coef[..., 0] = 1.0
+        coef[..., 1] = T
+        coef[..., 2] = wdot
+        G, dg = batch.forcing_combined(coef, basis_terms)
+        if any(forcing_fx):
+            f = np.zeros((L, C, n))
+            for j, fx in enumerate(forcing_fx):
+                for e in fx:
+                    f[:, j, :] += e.generalized_force(t, theta[:, j], theta[:, j] * ratio2[j], cases[j].ctx)
+            G_e, dg_e = batch.forcing(f)
+            G, dg = G + G_e, dg + dg_e
+        return G, dg
 
     sig = batch.sigma
 
