@@ -10,12 +10,14 @@
 - ``model``         the comparison model (TOML the user edits): drive train, effects, plugins -> simulation cases
 - ``comparison``    one comparison end to end (measurement + model -> :class:`Comparison`), noise matching
 - ``calibration``   the drive-train nuisances (damping, bearing stiffness) fitted to the measurement first
+- ``calibration_points`` the calibration's scan points: a batch of drive-train values scored, vertex, 1-sigma
 - ``disagreements`` the largest disagreements, ranked, in physical terms
 - ``fitspace``      an effect's declared fit parameters as search coordinates; starting points
 - ``search``        the batched search rounds and the quadratic surrogate
 - ``fitting``       one group of candidate effects fitted in batched rounds; each one's best fit and 1-sigma
 - ``candidates``    a fitted candidate, the attribution's result, and the claim and rival rules
 - ``attribution``   fit every missing registered effect, rank by error reduction, claim, flag the unexplained
+- ``nuisance_refit`` a calibrated attribution's leading candidates refitted with the nuisances (short scans)
 - ``joint_refit``   a calibrated pass's claimed effect refitted with the nuisances over their whole box
 - ``chaos``         a chaotic model (backlash rattle): several realisations, whole-record ladders, intervals
 - ``refit``         the effects already in the model fitted again, each against the model without it

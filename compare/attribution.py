@@ -17,7 +17,7 @@ the lowest error then get the nuisances and their own parameters refitted
 jointly (:func:`compare.calibration.calibrate` with ``free_effect``: short
 coordinate scans around the calibrated values and the fitted parameters), and
 keep the lower of the two errors (and the parameters that gave it), measured against the baseline given the same
-refit, on the periodic path they were searched on (:func:`_refine_nuisances`): an effect whose signature resembles a nuisance
+refit, on the periodic path they were searched on (:func:`compare.nuisance_refit.refine_nuisances`): an effect whose signature resembles a nuisance
 (Hertz stiffness moves the mesh resonance as bearing stiffness does) is not
 penalised because the calibration already bent the nuisances towards it. The
 time-stepped candidates (fitted in the second process on a shorter window)
@@ -42,6 +42,7 @@ from compare.error import effective_count
 from compare.fitspace import CHAIN_EFFECTS, bounds_hit, fit_space
 from compare.fitting import (explained_keys, frequency_ladder, prepared_case, record_period_s, search_group,
                              transient_groups, window_label, window_s)
+from compare.nuisance_refit import refine_nuisances, refit_args, refit_payload
 from compare.response import mark_shaft_locks
 from gearpit.errors import GearpitError
 
@@ -123,7 +124,7 @@ def attribute(ref: Reference, model, baseline_residual: np.ndarray, *, candidate
             r, n, seconds["periodic"] = search_group(periodic, *args, False, *tail)
             if refit:
                 t1 = time.perf_counter()
-                n += _refine_nuisances(r, ref, model, calibration, settings, list(disagreements))
+                n += refine_nuisances(r, ref, model, calibration, settings, list(disagreements))
                 seconds["nuisance_refit"] = time.perf_counter() - t1
             results += r
             n_sims += n
@@ -155,7 +156,7 @@ def _fit_in_workers(transient: list, periodic: list, args: tuple, tail: tuple, c
     """Fit every candidate in a pool of worker processes, one per core (this process waits): each
     :func:`transient_groups` group is one job (searched on a window, confirmed on the record), each periodic
     effect another, then the nuisance refit of the leading periodic ones (``calibration`` given,
-    :func:`_refine_nuisances`: the baseline's refit is queued before the periodic jobs, the candidates' after
+    :func:`compare.nuisance_refit.refine_nuisances`: the baseline's refit is queued before the periodic jobs, the candidates' after
     them, since the ranking needs them all). Returns (results, n_simulations); ``seconds`` gets each job's wall time.
 
     Why one job per periodic effect and none in this process: the longest jobs go first and the pool hands out
@@ -179,8 +180,7 @@ def _fit_in_workers(transient: list, periodic: list, args: tuple, tail: tuple, c
         # foreign rig's loop, when the periodic fits ran in this process)
         payload = pickle.dumps((args, tail))
         stepped = [executor.submit(_search_and_confirm_payload, g, payload) for g in transient_groups(transient)]
-        null_refit = (executor.submit(_refit_payload, pickle.dumps(_refit_args(ref, model, calibration,
-                                                                                settings)))
+        null_refit = (executor.submit(refit_payload, pickle.dumps(refit_args(ref, model, calibration, settings)))
                       if calibration is not None else None)
         jobs = [(n, executor.submit(_search_payload, [n], payload)) for n in periodic]
         results, n_sims = [], 0
@@ -190,8 +190,8 @@ def _fit_in_workers(transient: list, periodic: list, args: tuple, tail: tuple, c
             n_sims += n
         if calibration is not None:
             t1 = time.perf_counter()
-            n_sims += _refine_nuisances(results, ref, model, calibration, settings, list(disagreements),
-                                        executor=executor, null_refit=null_refit)
+            n_sims += refine_nuisances(results, ref, model, calibration, settings, list(disagreements),
+                                       executor=executor, null_refit=null_refit)
             seconds["nuisance_refit"] = time.perf_counter() - t1
         for i, f in enumerate(stepped):
             r, n, seconds[f"time_stepped_{i + 1}"] = f.result()
@@ -386,93 +386,3 @@ def _drivetrain_draws(c: CandidateResult, ref: Reference, model, settings: Attri
         return [], 0
     same = all(math.isclose(v, cal.start[k], rel_tol=1e-9) for k, v in cal.values.items())
     return ([] if same else [dict(cal.values)]), cal.n_simulations
-
-
-def _refit_settings(calibration, settings: AttributionSettings):
-    """The :class:`compare.calibration.CalibrationSettings` of the nuisance refit (:func:`_refine_nuisances`)."""
-    from compare.calibration import CalibrationSettings
-
-    return CalibrationSettings(parameters=tuple(calibration.values), widths_u=tuple(settings.refine_widths_u),
-                               points_per_side=tuple(settings.refine_points), seed=settings.seed)
-
-
-def _refit_args(ref: Reference, model, calibration, settings: AttributionSettings, start: dict | None = None,
-                effect=None) -> tuple:
-    """The arguments of one refit of :func:`_refine_nuisances` (:func:`_refit`): from ``start`` (default: the
-    calibration's values), with ``effect`` (an :class:`datagen.effects.Effect`) in and free, or the baseline."""
-    return (ref, model, _refit_settings(calibration, settings), settings.search_solver(transient=False),
-            dict(start if start is not None else calibration.values), effect)
-
-
-def _refit(ref, model, cs, solver, start, effect):
-    """One nuisance refit (:func:`_refit_args`)."""
-    from compare.calibration import calibrate
-
-    extra = () if effect is None else (effect,)
-    return calibrate(ref, model, extra_effects=extra, settings=cs, free_effect=effect is not None, solver=solver,
-                     start=start)
-
-
-def _refit_payload(payload: bytes):
-    """:func:`_refit` in a worker process, its arguments pickled by the caller (:func:`_fit_in_workers` says why)."""
-    return _refit(*pickle.loads(payload))
-
-
-def _refine_nuisances(results: list, ref: Reference, model, calibration, settings: AttributionSettings,
-                      disagreements, *, executor=None, null_refit=None) -> int:
-    """Refit the calibrated nuisances with each of the ``refine_top`` best periodic candidates in (held at its
-    fitted parameters); a candidate keeps the better of the two errors. Returns the simulations run.
-
-    Two rules keep the refit fair (module docstring):
-
-    - Every refit runs on the periodic path, the one the candidates were searched on
-      (:func:`compare.fitting._run`). Left to "auto", a candidate whose record period is long (a wheel
-      eccentricity: one wheel revolution) went time-stepped, whose steady state differs from the periodic one
-      at weak mesh harmonics by up to 2.4 dB (the mesh follows the vibrating angle there; spur-gds, 1000 rpm,
-      4 f_m): measured on a rig with a hidden pitch error and housing mode, both fitted and added, a wheel
-      eccentricity of 0.2 um - its lower bound, no effect at all - was claimed with a 36 % reduction.
-    - The baseline gets the same refit first (no candidate in). When that lowers its error, every candidate's
-      refit starts from the baseline's refitted nuisances and a refitted candidate is measured against the
-      refitted baseline: what more nuisance fitting gives is not credited to the effect. Measured on that rig
-      (1 s, calibrated): the null wheel eccentricity was credited 22 % of the error before; the refitted
-      baseline's error was 1.46 dB against the calibration's 2.07 dB (coordinate scans stop short where two
-      dampings trade off).
-
-    With ``executor`` (a process pool) the candidates' refits run in its workers, and ``null_refit`` is the
-    baseline's, submitted before the search (:func:`attribute`): each refit is one deterministic function of
-    its pickled arguments, so the result is the same as in this process. Measured on the escalated default
-    path (``experiments/bench_compare.py``, 2 idle cores): the calibrated pass's refit 18.4 s in this process,
-    10.9 s in two workers (the candidates' refits, free in their effect too, cost more than the baseline's).
-    """
-    from compare.error import combine, excess
-
-    ranked = sorted((c for c in results if c.status == "fitted" and math.isfinite(c.raw_error_db)),
-                    key=lambda c: c.raw_error_db)[:settings.refine_top]
-    if not ranked:
-        if null_refit is not None:
-            null_refit.cancel()
-        return 0
-    null = null_refit.result() if null_refit is not None else _refit(*_refit_args(ref, model, calibration, settings))
-    n = null.n_simulations
-    # raw errors (Calibration.error_db is raw)
-    better = [null.error_db < c.raw_baseline_error_db for c in ranked]
-    jobs = [_refit_args(ref, model, calibration, settings, start=null.values if b else None,
-                        effect=c.build_effect())
-            for c, b in zip(ranked, better)]
-    if executor is not None:
-        cals = [f.result() for f in [executor.submit(_refit_payload, pickle.dumps(j)) for j in jobs]]
-    else:
-        cals = [_refit(*j) for j in jobs]
-    for c, b, cal in zip(ranked, better, cals):
-        n += cal.n_simulations
-        # raw errors on both sides: the fit's objective
-        c.nuisance = dict(cal.values) if cal.error_db < c.raw_error_db else dict(calibration.values)
-        if cal.error_db < c.raw_error_db:
-            c.params = {**c.params, **cal.effect_params}
-            c.set_raw(dict(cal.view_error_db), cal.error_db)
-            c.explains = explained_keys(ref, cal.residual_db, disagreements)
-            if b:
-                c.raw_baseline_error_db = null.error_db
-                c.baseline_view_error_db = excess(dict(null.view_error_db), c.noise_view_db)
-                c.baseline_error_db = combine(c.baseline_view_error_db)
-    return n

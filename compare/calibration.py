@@ -130,9 +130,9 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from compare.error import VIEW_WEIGHTS
+from compare.calibration_points import Point, evaluate_points, find_point, scan_sigma, scan_vertex
 from compare.fitspace import FitParameter
-from gearpit.errors import GearpitError, require
+from gearpit.errors import require
 
 #: calibrated drive-train fields (datagen.lumped_model.DriveTrain) and their search bounds (SI, log scale)
 NUISANCES = {
@@ -233,16 +233,6 @@ class Calibration:
                 "elapsed_s": float(self.elapsed_s)}
 
 
-@dataclass(eq=False)
-class _Point:
-    u: np.ndarray
-    error_db: float = math.inf          # what is minimised: the error over the calibration's views
-    total_db: float = math.inf
-    gain_db: float = math.nan
-    residual_db: np.ndarray | None = None
-    view_error_db: dict = field(default_factory=dict)
-
-
 def drivetrain_values(model, names=DEFAULT_PARAMETERS) -> dict:
     """The model's current values of the nuisances ``names`` (its ``[drivetrain]`` table over the defaults)."""
     from datagen.lumped_model import DriveTrain
@@ -304,27 +294,27 @@ def calibrate(ref, model, *, extra_effects: tuple = (), settings: CalibrationSet
     n = len(params)
     centre = np.array([float(p.to_u(min(max(s0[p.name], p.lo), p.hi))) for p in params])
     counter = [0]
-    first = _Point(centre.copy())      # the start values, exactly (evaluated with the first scan)
-    points: list[_Point] = []
-    scans: list[list[_Point]] = []
+    first = Point(centre.copy())      # the start values, exactly (evaluated with the first scan)
+    points: list[Point] = []
+    scans: list[list[Point]] = []
     for w, k in zip(settings.widths_u, settings.points_per_side):
         offsets = [w * i / k for i in range(-k, k + 1) if i]
         scans = [[] for _ in range(n)]
         batch = []
-        centre_pt = _find(points, centre)
+        centre_pt = find_point(points, centre)
         if centre_pt is None:
-            centre_pt = first if not points else _Point(centre.copy())
+            centre_pt = first if not points else Point(centre.copy())
             batch.append(centre_pt)
         for j in range(n):
             for d in offsets:
                 u = centre.copy()
                 u[j] = np.clip(u[j] + d, 0.0, 1.0)
-                q = _find(points + batch, u)
+                q = find_point(points + batch, u)
                 if q is None:
-                    q = _Point(u)
+                    q = Point(u)
                     batch.append(q)
                 scans[j].append(q)
-        _evaluate(ref, model, params, batch, extra_effects, settings.seed, solver, counter, settings.views,
+        evaluate_points(ref, model, params, batch, extra_effects, settings.seed, solver, counter, settings.views,
                   exact=first if any(q is first for q in batch) else None, start=s0, free=free)
         points += batch
         for j in range(n):
@@ -332,19 +322,19 @@ def calibrate(ref, model, *, extra_effects: tuple = (), settings: CalibrationSet
         # each coordinate to the vertex of the parabola through its scan's best point and neighbours
         new = centre.copy()
         for j in range(n):
-            new[j] = _vertex([q for q in scans[j] if math.isfinite(q.error_db)], j, centre[j])
+            new[j] = scan_vertex([q for q in scans[j] if math.isfinite(q.error_db)], j, centre[j])
         best = min(points, key=lambda q: q.error_db)
-        centre = new if _find(points, new) is None or _find(points, new).error_db <= best.error_db else best.u.copy()
-    last = _find(points, centre)
+        centre = new if find_point(points, new) is None or find_point(points, new).error_db <= best.error_db else best.u.copy()
+    last = find_point(points, centre)
     if last is None:
-        last = _Point(centre.copy())
-        _evaluate(ref, model, params, [last], extra_effects, settings.seed, solver, counter, settings.views,
+        last = Point(centre.copy())
+        evaluate_points(ref, model, params, [last], extra_effects, settings.seed, solver, counter, settings.views,
                   free=free)
         points.append(last)
     best = min((q for q in points if math.isfinite(q.error_db)), key=lambda q: q.error_db, default=None)
     require(best is not None, "calibration", model.describe(), "a model that simulates at this operating point")
     values = {p.name: s0[p.name] if best is first else float(p.from_u(best.u[j])) for j, p in enumerate(params)}
-    sigma = _sigma(ref, params, values, scans, best, settings.views)
+    sigma = scan_sigma(ref, params, values, scans, best, settings.views)
     effect_params = {k: values.pop(k) for k in list(values) if k not in names}
     effect_sigma = {k: v for k, v in sigma.items() if k not in names}
     sigma = {k: v for k, v in sigma.items() if k in names}
@@ -354,89 +344,6 @@ def calibrate(ref, model, *, extra_effects: tuple = (), settings: CalibrationSet
                        held_out=held_out, effect_params=effect_params, effect_sigma=effect_sigma,
                        gain_db=best.gain_db, n_simulations=counter[0], elapsed_s=time.perf_counter() - t0,
                        residual_db=best.residual_db, view_error_db=best.view_error_db)
-
-
-def _find(points: list[_Point], u: np.ndarray) -> _Point | None:
-    return next((q for q in points if np.allclose(q.u, u, atol=1e-7)), None)
-
-
-def _vertex(scan: list[_Point], j: int, fallback: float) -> float:
-    """Coordinate ``j`` of the minimum of the parabola in ``u_j`` through the scan's best point and its two
-    neighbours (the best point itself at an end of the scan or for a non-convex triple)."""
-    if len(scan) < 3:
-        return fallback
-    scan = sorted(scan, key=lambda q: q.u[j])
-    i = int(np.argmin([q.error_db for q in scan]))
-    if i == 0 or i == len(scan) - 1:
-        return float(scan[i].u[j])
-    (x0, x1, x2), (y0, y1, y2) = ((q.u[j] for q in scan[i - 1:i + 2]), (q.error_db ** 2 for q in scan[i - 1:i + 2]))
-    if min(x1 - x0, x2 - x1) < 1e-9:
-        return float(x1)
-    # vertex of the parabola through three points (Numerical Recipes eq. 10.2.1)
-    num = (x1 - x0) ** 2 * (y1 - y2) - (x1 - x2) ** 2 * (y1 - y0)
-    den = (x1 - x0) * (y1 - y2) - (x1 - x2) * (y1 - y0)
-    if den >= 0:          # not convex: keep the best point
-        return float(x1)
-    return float(np.clip(x1 - 0.5 * num / den, x0, x2))
-
-
-def _evaluate(ref, model, params, pts, extra_effects, seed, solver, counter, views, exact=None, start=None,
-              free=None) -> None:
-    """Simulate the model at every point (one batch) and record the errors of each; point ``exact`` is
-    simulated at the ``start`` values themselves (not their clipped search coordinate)."""
-    from compare.comparison import evaluate
-    from datagen.simulate import simulate
-
-    if not pts:
-        return
-    m = ref.measurement
-    dur = ref.model_duration_s()
-    cases = []
-    for q in pts:
-        vals = dict(start) if q is exact else {p.name: float(p.from_u(q.u[j])) for j, p in enumerate(params)}
-        extra = tuple(extra_effects)
-        if free is not None:
-            mine = {k: vals.pop(k) for k in list(vals) if k in free.params()}
-            extra = extra[:-1] + (replace(free, **mine),)
-        mm = model.with_drivetrain(vals)
-        cases.append(mm.case(m.pair, speed_rpm=ref.speed.speed_rpm, torque_nm=m.torque_nm, duration_s=dur,
-                             fs_hz=m.fs_hz, seed=seed, extra_effects=extra, solver=solver))
-    try:
-        sigs = simulate(cases, channels=(model.sensor,))
-    except (GearpitError, FloatingPointError, np.linalg.LinAlgError):
-        sigs = []
-        for c in cases:
-            try:
-                sigs += simulate([c], channels=(model.sensor,))
-            except (GearpitError, FloatingPointError, np.linalg.LinAlgError):
-                sigs.append(None)
-    counter[0] += len(cases)
-    for q, s in zip(pts, sigs):
-        y = None if s is None else s.channels.get(model.sensor)
-        if y is None or not np.all(np.isfinite(y)):
-            continue
-        ev = evaluate(ref, y, m.fs_hz, seed=seed)
-        ve = ev.residuals.view_error_db
-        num = sum(VIEW_WEIGHTS[v] * ve[v] ** 2 for v in views if v in ve)
-        den = sum(VIEW_WEIGHTS[v] for v in views if v in ve)
-        q.error_db = math.sqrt(num / den) if den > 0 else ev.residuals.total_db
-        q.total_db, q.gain_db = ev.residuals.total_db, ev.residuals.gain_db
-        q.residual_db, q.view_error_db = ev.residuals.residual_db, ev.residuals.view_error_db
-
-
-def _sigma(ref, params, values, scans, best, views) -> dict:
-    """Conditional 1-sigma of each nuisance (the others held): curvature of E^2 along its last scan."""
-    from compare.error import effective_count
-    from compare.search import line_sigma_u
-
-    n_eff = effective_count(ref.plan, views, q=ref.reliability)     # Kish's count over the calibrated views
-    out = {}
-    for j, p in enumerate(params):
-        line = [q for q in scans[j] if math.isfinite(q.error_db)] if scans else []
-        su = line_sigma_u([q.u[j] - best.u[j] for q in line], [q.error_db for q in line], best.error_db, n_eff)
-        sg = p.sigma_from_u(values[p.name], su)
-        out[p.name] = sg if sg <= p.hi - p.lo else math.inf
-    return out
 
 
 def calibrated_compare(measurement, model, *, reference=None, seed: int = 0, calibrate_nuisances: bool | None = None,

@@ -6,7 +6,7 @@ On a rig whose drive train is far from the model's defaults the loop calibrates
 the nuisances first (:mod:`compare.escalation`), *without* the missing effect:
 the calibration bends them to imitate part of it, and the effect is then fitted
 at those bent nuisances. The local refit of the attribution
-(:func:`compare.attribution._refine_nuisances`: short scans around the
+(:func:`compare.nuisance_refit.refine_nuisances`: short scans around the
 calibrated values) cannot leave that basin. Measured on the helical rig of
 :data:`compare.synthetic.OTHER_RIGS` (mesh damping 0.03, bearing stiffness
 3e8 N/m, bearing damping 0.03; a hidden grade-8 pitch error, noise seed 11):
@@ -214,13 +214,13 @@ def _global_stage(ref, model, cand, start_nu: dict, nuisances: tuple, settings, 
 
 def _sample_errors(ref, model, effect: str, params: dict, nuisances: tuple, us: np.ndarray, settings) -> np.ndarray:
     """The order view's error at each row of ``us`` (one batch; inf where a simulation failed)."""
-    from compare.calibration import _evaluate, _Point
+    from compare.calibration_points import Point, evaluate_points
     from datagen.effects import EffectSpec
 
     space = _space(effect, nuisances)
     eff = EffectSpec.from_dict({"name": effect, **params}).build()
-    pts = [_Point(np.asarray(u, float)) for u in us]
-    _evaluate(ref, model, space, pts, (eff,), settings.seed, settings.search_solver(transient=False), [0],
+    pts = [Point(np.asarray(u, float)) for u in us]
+    evaluate_points(ref, model, space, pts, (eff,), settings.seed, settings.search_solver(transient=False), [0],
               ("order",), free=eff)
     return np.array([q.error_db for q in pts])
 
