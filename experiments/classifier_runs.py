@@ -87,12 +87,14 @@ def dataset(name: str, data_dir: Path, channel: str | None = None, stiffness: di
                      reference=d.reference)
 
 
-def edited_default_split(data_dir: Path, edit, workers: int, label: str) -> tuple[SignalSet, SignalSet]:
+def edited_default_split(data_dir: Path, edit, workers: int, label: str, *,
+                         channels: tuple = ("acc_pinion_loa_m_s2",), channel: str | None = None
+                         ) -> tuple[SignalSet, SignalSet]:
     """The default dataset (``default`` + ``default_healthy`` sweeps) generated once into ``data_dir`` with each
-    sweep document passed through ``edit(doc) -> doc`` and only the accelerometer stored, split as the in-domain
-    protocol splits it (70/30, stratified, split seed :data:`SEED`): ``(train, test)``. The experiments that ask
-    what one change of the data does to the protocol's CNN (``sampling_rate_check.py``,
-    ``nuisance_ceiling_check.py``)."""
+    sweep document passed through ``edit(doc) -> doc`` and only ``channels`` stored (default the accelerometer),
+    split as the in-domain protocol splits it (70/30, stratified, split seed :data:`SEED`): ``(train, test)`` of
+    ``channel`` (default the first stored). The experiments that ask what one change of the data does to the
+    protocol's CNN (``sampling_rate_check.py``, ``nuisance_ceiling_check.py``, ``path_inverse_check.py``)."""
     from datagen.generate import generate
     from datagen.sweep import sweep_from_dict
     from gearpit.tomlio import read_toml
@@ -100,11 +102,11 @@ def edited_default_split(data_dir: Path, edit, workers: int, label: str) -> tupl
     for part in ("default", "default_healthy"):
         if not (data_dir / part / "index.parquet").is_file():
             doc = edit(dict(read_toml(SWEEPS / f"{part}.toml")))
-            doc["sweep"] = dict(doc["sweep"], channels=["acc_pinion_loa_m_s2"])
+            doc["sweep"] = dict(doc["sweep"], channels=list(channels))
             t0 = time.perf_counter()
             generate(sweep_from_dict(doc), data_dir / part, workers=workers, progress=False)
             log(f"{label}: generated {part} in {time.perf_counter() - t0:.0f} s")
-    data = dataset("default", data_dir)
+    data = dataset("default", data_dir, channel=channel)
     tr, te = stratified_split(strata(data), 0.3, SEED)
     return data.subset(tr), data.subset(te)
 

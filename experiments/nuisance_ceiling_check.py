@@ -61,7 +61,7 @@ def cnn_variants() -> dict:
     from models.representation_spec import RepresentationSpec
 
     tsa = dict(kind="tsa", n_revs=8, samples_per_rev=1024)
-    return {"tsa_op": cr.VARIANTS["tsa_op"],
+    return {"tsa_op": cr.VARIANTS["tsa_op"], "tsa_level": cr.VARIANTS["tsa_level"],
             "tsa_int2_op": (RepresentationSpec(**tsa, integrate=2), cr.OPERATING),
             "tsa_int2_lp2_op": (RepresentationSpec(**tsa, integrate=2, lowpass_mesh_orders=2.0), cr.OPERATING)}
 
