@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import copy
+import functools
 import json
 import sys
 from pathlib import Path
@@ -84,6 +85,13 @@ def narrowed(doc: dict, changes: dict) -> dict:
     return out
 
 
+def variant_doc(name: str, doc: dict) -> dict:
+    """The sweep document ``doc`` as variant ``name`` makes it: its draws narrowed (:data:`VARIANTS`) and its
+    records per class multiplied (:data:`RECORDS`)."""
+    doc = narrowed(doc, VARIANTS[name])
+    return {**doc, "sweep": dict(doc["sweep"], samples_per_class=doc["sweep"]["samples_per_class"] * RECORDS.get(name, 1))}
+
+
 def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--only", nargs="+", choices=sorted(VARIANTS), default=None, help="these variants only")
@@ -97,12 +105,7 @@ def main(argv=None) -> dict:
     cr.OUT = OUT
     rows = {}
     for name in names:
-
-        def edit(doc, name=name):
-            doc = narrowed(doc, VARIANTS[name])
-            return {**doc, "sweep": dict(doc["sweep"],
-                                         samples_per_class=doc["sweep"]["samples_per_class"] * RECORDS.get(name, 1))}
-
+        edit = functools.partial(variant_doc, name)
         train, test = cr.edited_default_split(OUT / name, edit, args.workers, name)
         for cnn in args.cnn:
             run = cnn if args.training_seed == 0 else f"{cnn}_seed{args.training_seed}"

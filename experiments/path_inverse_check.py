@@ -30,6 +30,7 @@ Bendat, J. S., Piersol, A. G. (2010). Random Data: Analysis and Measurement Proc
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import sys
 from dataclasses import replace
@@ -43,7 +44,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "experiments"))
 
 import classifier_runs as cr  # noqa: E402  (experiments/classifier_runs.py)
-from nuisance_ceiling_check import RECORDS, VARIANTS, narrowed  # noqa: E402
+from nuisance_ceiling_check import VARIANTS, variant_doc  # noqa: E402
 from sensor_protocol_design import SENSOR_VARIANTS  # noqa: E402
 
 OUT = ROOT / "experiments" / "out" / "models" / "path_inverse"
@@ -108,12 +109,7 @@ def main(argv=None) -> dict:
     cr.OUT = OUT
     rows = {}
     for name in args.only:
-
-        def edit(doc, name=name):
-            doc = narrowed(doc, VARIANTS[name])
-            return {**doc, "sweep": dict(doc["sweep"],
-                                         samples_per_class=doc["sweep"]["samples_per_class"] * RECORDS.get(name, 1))}
-
+        edit = functools.partial(variant_doc, name)
         where = OUT / name
         acc_tr, acc_te = cr.edited_default_split(where, edit, args.workers, name, channels=(ACC, TE), channel=ACC)
         te_tr, te_te = cr.edited_default_split(where, edit, args.workers, name, channels=(ACC, TE), channel=TE)
@@ -124,9 +120,8 @@ def main(argv=None) -> dict:
         g = wiener_fir(acc_tr.signals, te_tr.signals, fs)
         est_tr = replace(acc_tr, signals=apply_fir(acc_tr.signals, g), channel="te_estimated")
         est_te = replace(acc_te, signals=apply_fir(acc_te.signals, g), channel="te_estimated")
-        err = float(np.sqrt(np.mean((est_te.signals - te_te.signals - np.mean(est_te.signals - te_te.signals, axis=1,
-                                                                               keepdims=True)) ** 2)
-                            / np.mean((te_te.signals - te_te.signals.mean(axis=1, keepdims=True)) ** 2)))
+        diff = signal.detrend(est_te.signals - te_te.signals, type="constant", axis=-1)
+        err = float(np.sqrt(np.mean(diff ** 2) / np.mean(signal.detrend(te_te.signals, type="constant", axis=-1) ** 2)))
         cr.log(f"{name}: test records' TE estimate, RMS error / RMS of the TE (means removed) {err:.3f}")
         runs = {"te_estimated": (est_tr, est_te)}
         if not args.skip_true_te:
