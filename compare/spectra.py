@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
+from scipy import fft as sp_fft
 
 from features.tsa import AngleTrack, TimeInterpolant
 from gearpit.errors import require
@@ -124,11 +125,14 @@ def smooth_floor(p: np.ndarray, ok: np.ndarray) -> np.ndarray:
 
 
 def envelope_power(xa: np.ndarray, plan) -> np.ndarray:
-    """Power spectrum of the envelope of ``xa`` band-passed to the plan's envelope band (ideal FFT filter)."""
+    """Power spectrum of the envelope of ``xa`` band-passed to the plan's envelope band (ideal FFT filter): the
+    analytic signal of the band is the inverse transform of twice its positive-frequency bins."""
     n = xa.size
     fs_eq = plan.samples_per_rev * plan.fr_pinion_hz
-    spec = np.fft.fft(xa - xa.mean())
-    f = np.fft.fftfreq(n, 1.0 / fs_eq)
+    half = sp_fft.rfft(xa - xa.mean())
+    f = np.arange(half.size) * (fs_eq / n)
     lo, hi = plan.envelope_band_hz
-    env = np.abs(np.fft.ifft(spec * np.where((f >= lo) & (f <= hi), 2.0, 0.0)))
-    return power_spectrum(env)
+    band = (f >= lo) & (f <= hi)
+    spec = np.zeros(n, complex)
+    spec[:half.size][band] = 2.0 * half[band]
+    return power_spectrum(np.abs(sp_fft.ifft(spec)))

@@ -44,6 +44,7 @@ Lebold, M. et al. (2000). Review of vibration analysis methods for gearbox diagn
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 
@@ -71,14 +72,6 @@ def _tooth_powers(y: np.ndarray, z: int) -> np.ndarray:
     return (sq[edges[1:]] - sq[edges[:-1]]) / np.diff(edges)
 
 
-def _bin_level(p: np.ndarray, b: float) -> float:
-    """Power at fractional bin ``b``: the largest of the two bins around it (lines off the bin grid)."""
-    i = int(np.floor(b))
-    if abs(b - round(b)) < 1e-6:
-        return float(p[int(round(b))])
-    return float(max(p[i], p[min(i + 1, p.size - 1)]))
-
-
 def _pinion_part(xp: np.ndarray, plan: Plan):
     """Power spectrum, its floor, the non-order mask and the noise floor of a pinion-angle record."""
     pp = power_spectrum(xp)
@@ -104,17 +97,101 @@ def pinion_lines(x: np.ndarray, fs_hz: float, track: AngleTrack, plan: Plan) -> 
     return SignalViews(levels=levels, floors=floors, curves={"noise_floor": noise_floor})
 
 
+@dataclass(frozen=True, eq=False)
+class _Layout:
+    """Where each of a plan's locations is read, as index arrays (made once per plan and spectrum length by
+    :func:`_layout`; a comparison evaluates hundreds of signals on one plan)."""
+
+    no_order: np.ndarray      # non-order bins of the pinion-angle (and envelope) spectrum
+    no_order_w: np.ndarray    # non-order bins of the wheel-angle spectrum
+    in_bands: np.ndarray      # pinion-spectrum bins inside the analysed band range
+    order_p: tuple            # (location rows, lower bin, upper bin, floor bin): lines on the pinion spectrum
+    order_w: tuple            # the same on the wheel spectrum
+    band_lines: tuple         # (rows, centre bin): lines at no shaft order, the largest of 3 bins
+    bands: tuple              # ((row, bins of the band that are no order, or all of its bins), ...)
+    envelope: tuple           # (rows, lower bin, upper bin, floor bin, whether the level is the largest of 3 bins)
+    tsa: tuple                # ((row, shaft, key), ...)
+    stats: tuple              # ((row, name, gain), ...)
+
+
+def _line_bins(b: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
+    """The two bins whose larger power is a line's level at fractional bin ``b``: the bin itself when ``b`` is on
+    the grid, else the bins either side (a line off the bin grid)."""
+    on = np.abs(b - np.round(b)) < 1e-6
+    lo = np.where(on, np.round(b), np.floor(b)).astype(int)
+    hi = np.where(on, lo, np.minimum(np.floor(b).astype(int) + 1, size - 1))
+    return lo, hi
+
+
+@lru_cache(maxsize=8)
+def _layout(plan: Plan, n_p: int, n_w: int) -> _Layout:
+    R, Rw, zp, zw = plan.n_revs, plan.n_revs_wheel, plan.z_pinion, plan.z_wheel
+    no_order = non_order(n_p, plan)
+    fbins = np.arange(n_p) * plan.bin_hz
+    in_bands = (fbins > plan.bands_hz[0][0]) & (fbins < plan.bands_hz[-1][1])
+    rows = {k: [] for k in ("op", "ow", "bl", "env", "env_line")}
+    pos = {k: [] for k in rows}
+    bands, tsa, stats = [], [], []
+    for i, loc in enumerate(plan.locations):
+        view, name = loc.key.split(":", 1)
+        if view == "order":
+            k = "ow" if "wheel" in name else "op"
+            rows[k].append(i)
+            pos[k].append(loc.order_pinion * zw / zp * Rw if k == "ow" else loc.order_pinion * R)
+        elif view == "band" and name.startswith("line"):
+            rows["bl"].append(i)
+            pos["bl"].append(loc.freq_hz / plan.bin_hz)
+        elif view == "band":
+            lo_b, hi_b = _band_bins(loc, plan)
+            sel = no_order[lo_b:hi_b]
+            bins = np.arange(lo_b, min(hi_b, n_p))
+            bands.append((i, bins[sel[:bins.size]] if sel.any() else bins))
+        elif view == "envelope":
+            k = "env_line" if name.startswith("line") else "env"
+            rows[k].append(i)
+            pos[k].append(loc.order_pinion * R)
+        elif view == "tsa":
+            shaft, key = name.split("_", 1)
+            tsa.append((i, shaft, key))
+        else:
+            stats.append((i, name, loc.gain))
+
+    def lines(k, size):
+        b = np.asarray(pos[k], float)
+        lo, hi = _line_bins(b, size)
+        return np.asarray(rows[k], int), lo, hi, np.round(b).astype(int)
+
+    def three_bins(k, size):
+        i0 = np.round(np.asarray(pos[k], float)).astype(int)
+        return np.asarray(rows[k], int), np.maximum(i0 - 1, 0), np.minimum(i0 + 1, size - 1), i0
+
+    env_lines, env_three = lines("env", n_p), three_bins("env_line", n_p)
+    envelope = tuple(np.concatenate([a, b]) for a, b in zip(env_lines, env_three)) + (
+        np.concatenate([np.zeros(env_lines[0].size, bool), np.ones(env_three[0].size, bool)]),)
+    return _Layout(no_order=no_order, no_order_w=non_order_wheel(n_w, plan), in_bands=in_bands,
+                   order_p=lines("op", n_p), order_w=lines("ow", n_w), band_lines=three_bins("bl", n_p),
+                   bands=tuple(bands), envelope=envelope, tsa=tuple(tsa), stats=tuple(stats))
+
+
+def _three_max(p: np.ndarray, lo: np.ndarray, i0: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    return np.maximum(np.maximum(p[lo], p[i0]), p[hi])
+
+
 def analyse(x: np.ndarray, fs_hz: float, track: AngleTrack, plan: Plan, *, keep_curves: bool = False) -> SignalViews:
     """Levels and floors (dB) of ``x`` at the plan's locations (module docstring)."""
     rec = angle_records(x, fs_hz, track, plan)
-    pp, fl_p, no_order, noise_floor = _pinion_part(rec.pinion.ravel(), plan)
+    xp = rec.pinion.ravel()
+    pp = power_spectrum(xp)
     pw = power_spectrum(rec.wheel.ravel())
+    lay = _layout(plan, pp.size, pw.size)
+    fl_p = smooth_floor(pp, lay.no_order)
+    sel = pp[lay.no_order & lay.in_bands] if np.count_nonzero(lay.no_order & lay.in_bands) >= 16 else pp[lay.in_bands]
+    noise_floor = float(np.quantile(sel, FLOOR_QUANTILE) / EXP_Q)
     R, Rw = plan.n_revs, plan.n_revs_wheel
     zp, zw = plan.z_pinion, plan.z_wheel
-    env = envelope_power(rec.pinion.ravel(), plan)
-    fl_w = smooth_floor(pw, non_order_wheel(pw.size, plan))
-    fl_e = smooth_floor(env, non_order(env.size, plan))
-    bin_hz = plan.bin_hz
+    env = envelope_power(xp, plan)
+    fl_w = smooth_floor(pw, lay.no_order_w)
+    fl_e = smooth_floor(env, lay.no_order)
     tsa_p = rec.pinion.mean(axis=0)
     tsa_w = rec.wheel.mean(axis=0)
     # noise left in a TSA: record variance of the floor (sum of per-bin floor power / 3 for a Hann
@@ -131,50 +208,36 @@ def analyse(x: np.ndarray, fs_hz: float, track: AngleTrack, plan: Plan, *, keep_
                            "tooth_min": tp.min()}
     stats = time_domain_statistics(np.asarray(x, float) - np.mean(x))
     ind = {s: gear_condition_indicators(tsa_parts[s][0], tsa_parts[s][1]) for s in ("pinion", "wheel")}
-    levels = np.empty(len(plan.locations))
-    floors = np.full(len(plan.locations), np.nan)
-    for i, loc in enumerate(plan.locations):
-        view, name = loc.key.split(":", 1)
-        if view == "order":
-            if "wheel" in name:          # wheel lines: integer wheel orders, on the wheel-angle spectrum
-                b = loc.order_pinion * zw / zp * Rw
-                levels[i], floors[i] = db(_bin_level(pw, b)), db(fl_w[int(round(b))])
-            else:
-                b = loc.order_pinion * R
-                levels[i], floors[i] = db(_bin_level(pp, b)), db(fl_p[int(round(b))])
-        elif view == "band":
-            if name.startswith("line"):
-                b = loc.freq_hz / bin_hz
-                i0 = int(round(b))
-                levels[i] = db(pp[max(i0 - 1, 0):i0 + 2].max())
-                floors[i] = db(fl_p[i0])
-            else:
-                lo, hi = (float(v) for v in name.split("-"))
-                lo_b, hi_b = _band_bins(loc, plan)
-                sel = no_order[lo_b:hi_b]
-                seg = pp[lo_b:hi_b][sel] if sel.any() else pp[lo_b:hi_b]
-                levels[i], floors[i] = db(seg.mean()), db(noise_floor)
-        elif view == "envelope":
-            b = loc.order_pinion * R
-            i0 = int(round(b))
-            levels[i] = db(_bin_level(env, b) if not name.startswith("line") else env[max(i0 - 1, 0):i0 + 2].max())
-            floors[i] = db(fl_e[i0])
-        elif view == "tsa":
-            shaft, key = name.split("_", 1)
-            levels[i], floors[i] = db(tsa_vals[shaft][key]), db(tsa_parts[shaft][2])
+    n_loc = len(plan.locations)
+    power = np.empty(n_loc)              # levels as powers (10 log10), floors likewise, converted once at the end
+    floor = np.full(n_loc, np.nan)
+    for (rows, lo, hi, fb), p, fl in ((lay.order_p, pp, fl_p), (lay.order_w, pw, fl_w)):
+        power[rows] = np.maximum(p[lo], p[hi])
+        floor[rows] = fl[fb]
+    rows, lo, hi, i0 = lay.band_lines
+    power[rows], floor[rows] = _three_max(pp, lo, i0, hi), fl_p[i0]
+    for row, bins in lay.bands:
+        power[row], floor[row] = pp[bins].mean(), noise_floor
+    rows, lo, hi, i0, three = lay.envelope
+    power[rows] = np.where(three, _three_max(env, lo, i0, hi), np.maximum(env[lo], env[hi]))
+    floor[rows] = fl_e[i0]
+    for row, shaft, key in lay.tsa:
+        power[row], floor[row] = tsa_vals[shaft][key], tsa_parts[shaft][2]
+    levels = db(power)
+    floors = np.where(np.isnan(floor), np.nan, db(np.nan_to_num(floor, nan=1.0)))
+    for row, name, gain in lay.stats:
+        if name in STATS:
+            levels[row] = db(abs(stats[name]) ** 2 if STATS[name][0] == 20 else abs(stats[name]))
         else:
-            if name in STATS:
-                levels[i] = db(abs(stats[name]) ** 2 if STATS[name][0] == 20 else abs(stats[name]))
-            else:
-                shaft, key = name.split("_", 1)
-                v = ind[shaft][key]
-                v = v if np.isfinite(v) else 0.0
-                levels[i] = db(abs(v) ** 2 if INDICATORS[key][0] == 20 else abs(v))
-            if not loc.gain:             # dimensionless indicators near 0; the RMS is a level and moves with the gain
-                levels[i] = max(levels[i], -60.0)
+            shaft, key = name.split("_", 1)
+            v = ind[shaft][key]
+            v = v if np.isfinite(v) else 0.0
+            levels[row] = db(abs(v) ** 2 if INDICATORS[key][0] == 20 else abs(v))
+        if not gain:                     # dimensionless indicators near 0; the RMS is a level and moves with the gain
+            levels[row] = max(levels[row], -60.0)
     curves = {}
     if keep_curves:
-        curves = {"order_hz": np.arange(pp.size) * bin_hz, "order_power": pp, "order_floor": fl_p,
+        curves = {"order_hz": np.arange(pp.size) * plan.bin_hz, "order_power": pp, "order_floor": fl_p,
                   "envelope_power": env, "envelope_floor": fl_e, "tsa_pinion": tsa_p, "tsa_wheel": tsa_w,
                   "noise_floor": noise_floor}
     return SignalViews(levels=levels, floors=floors, curves=curves)

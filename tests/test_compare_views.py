@@ -197,3 +197,48 @@ def test_reliability_weights_depend_on_the_measurement_only(base, monkeypatch):
     for view in ("band", "tsa", "stats"):
         idx = ref.plan.view_index(view)
         np.testing.assert_array_equal(w1[idx], g[idx])
+
+
+def test_levels_are_read_where_each_location_says(base):
+    """compare.views.analyse reads every location through index arrays made once per plan; here each line
+    location is read again the plain way, one by one from the curves it returns (pinion-spectrum lines, bands,
+    lines at no order, envelope lines), including a tone off the bin grid. Reference: the reading rules of the
+    module docstring (a line at a fractional bin: the larger of the two bins around it; a line found at no order:
+    the largest of three bins; a band: the mean power of its non-order bins). Tolerance: exact (same floats)."""
+    from compare.spectra import db, non_order
+    from compare.speed import constant_track
+    from compare.views import _band_bins, analyse
+
+    x, k = gear_record(tone_hz=611.3)
+    ref = prepare_reference(measured(x, k))
+    plan = ref.plan
+    track = constant_track(len(x), FS, ref.speed.fr_pinion_hz)
+    v = analyse(0.7 * x, FS, track, plan, keep_curves=True)
+    pp, env = v.curves["order_power"], v.curves["envelope_power"]
+    no_order = non_order(pp.size, plan)
+
+    def at(p, b):
+        if abs(b - round(b)) < 1e-6:
+            return p[int(round(b))]
+        return max(p[int(np.floor(b))], p[min(int(np.floor(b)) + 1, p.size - 1)])
+
+    checked = {"order": 0, "line": 0, "band": 0, "envelope": 0}
+    for i, loc in enumerate(plan.locations):
+        view, name = loc.key.split(":", 1)
+        if view == "order" and "wheel" not in name:
+            want, kind = at(pp, loc.order_pinion * plan.n_revs), "order"
+        elif view == "band" and name.startswith("line"):
+            i0 = int(round(loc.freq_hz / plan.bin_hz))
+            want, kind = pp[max(i0 - 1, 0):i0 + 2].max(), "line"
+        elif view == "band":
+            lo, hi = _band_bins(loc, plan)
+            sel = no_order[lo:hi]
+            want, kind = (pp[lo:hi][sel] if sel.any() else pp[lo:hi]).mean(), "band"
+        elif view == "envelope" and not name.startswith("line"):
+            want, kind = at(env, loc.order_pinion * plan.n_revs), "envelope"
+        else:
+            continue
+        assert v.levels[i] == db(want), loc.key
+        checked[kind] += 1
+    assert min(checked.values()) >= 1, checked
+    assert any(loc.key.startswith("band:line") for loc in plan.locations)
