@@ -31,9 +31,13 @@ class OperatingPoint:
         require_range("operating.torque_nm", self.torque_nm, 0.0, 1e7)
 
 
+#: ``omega_max dt`` of a case whose ``[solver] omega_dt`` is unset and whose effects ask for no finer step
+DEFAULT_OMEGA_DT = 0.3
+
+
 @dataclass(frozen=True)
 class SolverOptions:
-    """Numerical options: ``omega_dt`` (w_max dt), ``method`` (auto|periodic|transient), ``transient_s`` (s),
+    """Numerical options: ``omega_dt`` (w_max dt; unset: :meth:`step_for` the case's effects), ``method`` (auto|periodic|transient), ``transient_s`` (s),
     ``mesh_angle``: where the mesh stiffness and error are read, at the pinion's actual angle ("dynamic": the
     nominal rotation plus its vibration ``phi_1``, so a gear that follows a transmission error shifts its mesh
     timing) or at the nominal rotation plus the static wind-up ("nominal": the classic linear time-varying
@@ -44,14 +48,15 @@ class SolverOptions:
     the attribution moved, compare.candidates.AttributionSettings.search_solver; on the time-stepped path a
     step that straddles box edges modulates the mesh)."""
 
-    omega_dt: float = 0.3
+    omega_dt: float | None = None
     method: str = "auto"
     transient_s: float | None = None
     mesh_angle: str = "dynamic"
     step_limit: str = "position"
 
     def __post_init__(self):
-        require_range("solver.omega_dt", self.omega_dt, 0.01, 1.0)
+        if self.omega_dt is not None:
+            require_range("solver.omega_dt", self.omega_dt, 0.01, 1.0)
         require(self.method in dynamics.METHODS, "solver.method", self.method, f"one of: {', '.join(dynamics.METHODS)}")
         if self.transient_s is not None:
             require_range("solver.transient_s", self.transient_s, 0.0, 100.0)
@@ -59,6 +64,15 @@ class SolverOptions:
                 f"one of: {', '.join(dynamics.MESH_ANGLES)}")
         require(self.step_limit in dynamics.STEP_LIMITS, "solver.step_limit", self.step_limit,
                 f"one of: {', '.join(dynamics.STEP_LIMITS)}")
+
+    def step_for(self, effects=()) -> float:
+        """The ``omega_max dt`` a case with ``effects`` is stepped at: ``omega_dt`` when it is set, else
+        :data:`DEFAULT_OMEGA_DT` or the finest step an effect asks for (``Effect.max_omega_dt``: backlash, whose
+        pairs part at their contact edges, is converged only at 0.05; experiments/step_convergence.py)."""
+        if self.omega_dt is not None:
+            return float(self.omega_dt)
+        asked = [e.max_omega_dt for e in effects if getattr(e, "max_omega_dt", None) is not None]
+        return float(min([DEFAULT_OMEGA_DT, *asked]))
 
 
 #: mesh positions per cycle chosen by :func:`auto_positions_per_cycle`: per mesh harmonic in the flat pass band,

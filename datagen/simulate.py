@@ -24,8 +24,8 @@ Case file (TOML; units in key names, unknown keys are errors)::
     severity = 0.2
     [stiffness]                  # optional: positions_per_cycle, n_slices, pit_model, edges (point|box)
     [drivetrain]                 # optional: datagen.lumped_model.DriveTrain fields (SI)
-    [solver]                     # optional: omega_dt (0.3), method ("auto"), transient_s, mesh_angle ("dynamic"),
-                                 #   step_limit ("position")
+    [solver]                     # optional: omega_dt (0.3; 0.05 with backlash), method ("auto"), transient_s,
+                                 #   mesh_angle ("dynamic"), step_limit ("position")
     [[effects]]                  # optional, repeatable: name + parameters (SI)
     name = "noise"
     snr_db = 30.0
@@ -279,7 +279,7 @@ def prepare(case: Case) -> dynamics.DynamicCase:
                         torque_nm=case.operating.torque_nm)
     return dynamics.DynamicCase(model=model, record=rec, effects=case.effects, ctx=ctx,
                                 speed_rpm=case.operating.speed_rpm, torque_nm=case.operating.torque_nm,
-                                fs_hz=case.fs_hz, duration_s=case.duration_s, omega_dt=case.solver.omega_dt,
+                                fs_hz=case.fs_hz, duration_s=case.duration_s, omega_dt=case.solver.step_for(case.effects),
                                 method=case.solver.method, transient_s=case.solver.transient_s,
                                 mesh_angle=case.solver.mesh_angle, step_limit=case.solver.step_limit)
 

@@ -19,6 +19,11 @@ and 1500 rpm, converged only at 0.05, and the linear helical record was 1.68 / 3
 Re-measured at stop 51, with the record read as its mean over each step (``MeshRecords.window_all_at``): the linear
 helical record 0.81 dB at every step (yardstick 0.71); the backlash rows converge monotonically, 5.8 / 3.4 / 1.6 /
 0.6 dB at 0.3 / 0.15 / 0.1 / 0.05 (600 rpm), still only at 0.05.
+Stop 53: the spur pair with backlash at 5 N m is not converged at 0.3 either (1.87 dB against 0.57; 0.50 at 0.05),
+the helical pair with the Hertz law at 2 N m is (0.68 against 0.82), and with backlash at 20 N m, where no pair
+parts, it is within 0.3 dB of its 0.05 value at every step. So backlash declares the step it needs
+(``Backlash.max_omega_dt = 0.05``): a case that leaves ``[solver] omega_dt`` unset is stepped there
+(``SolverOptions.step_for``); the rows here set the step explicitly, as the attribution's search does.
 """
 from __future__ import annotations
 
@@ -57,6 +62,9 @@ CASES = {
     "helical, backlash, 2 N m, 600 rpm": ("helical-dct", 600.0, 2.0, _HELICAL, (_PE, _BL)),
     "helical, backlash, 2 N m, 1500 rpm": ("helical-dct", 1500.0, 2.0, _HELICAL, (_PE, _BL)),
     "helical, backlash, 2 N m, 3000 rpm": ("helical-dct", 3000.0, 2.0, _HELICAL, (_PE, _BL)),
+    "spur, backlash, 5 N m": ("spur-gds", 1000.0, 5.0, NUISANCE, (_PE, _BL)),
+    "helical, Hertz, 2 N m": ("helical-dct", 1500.0, 2.0, _HELICAL, (_PE, {"name": "hertz_nonlinear"})),
+    "helical, backlash, 20 N m": ("helical-dct", 1500.0, 20.0, _HELICAL, (_PE, _BL)),
 }
 
 

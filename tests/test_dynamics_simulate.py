@@ -141,8 +141,9 @@ def test_backlash_is_inert_under_load_and_separates_teeth_near_resonance():
     (F < 0) while the dead zone lets the teeth separate: the responses differ by > 10 % rms and Newton
     converges on every step. (The output is band-limited, so separation shows as near-zero force with
     filter ripple, not as exact zeros; the law itself is checked in the next test.)"""
+    # one step for both laws (unset, the backlash case would take its own finer step, Effect.max_omega_dt)
     base = Case(pair=SPUR, operating=OperatingPoint(1500.0, 11.3), duration_s=0.04, fs_hz=20000.0,
-                solver=SolverOptions(method="transient", transient_s=0.04))
+                solver=SolverOptions(omega_dt=0.3, method="transient", transient_s=0.04))
     lin, bl = simulate([base, replace(base, effects=({"name": "backlash", "backlash_m": 50e-6},))])
     assert np.min(lin.channels["mesh_force_n"]) > 0
     for k in lin.channels:
@@ -155,7 +156,7 @@ def test_backlash_is_inert_under_load_and_separates_teeth_near_resonance():
     fn = dc.model.natural_frequencies_hz[dc.model.mesh_mode_index]
     rpm = 0.9 * fn * 60 / SPUR.pinion.teeth
     light = Case(pair=SPUR, operating=OperatingPoint(rpm, 0.5), duration_s=60 / rpm, fs_hz=50000.0,
-                 solver=SolverOptions(method="transient", transient_s=0.02))
+                 solver=SolverOptions(omega_dt=0.3, method="transient", transient_s=0.02))
     lin2, bl2 = simulate([light, replace(light, effects=({"name": "backlash", "backlash_m": 50e-6},))])
     assert np.min(lin2.channels["mesh_force_n"]) < 0
     F, F_lin = bl2.channels["mesh_force_n"], lin2.channels["mesh_force_n"]
@@ -176,7 +177,7 @@ def test_backlash_that_never_opens_reproduces_the_linear_law_beside_an_eccentric
     comparison then claimed at its 1 um lower bound on the independent simulator's wheel eccentricity)."""
     base = Case(pair=SPUR, operating=OperatingPoint(1000.0, 50.0), duration_s=0.25, fs_hz=20000.0,
                 effects=({"name": "eccentricity_wheel", "amplitude_m": 47e-6},),
-                solver=SolverOptions(method="transient", transient_s=0.05))
+                solver=SolverOptions(omega_dt=0.3, method="transient", transient_s=0.05))   # one step for both laws
     lin, bl = simulate([base, replace(base, effects=base.effects + ({"name": "backlash", "backlash_m": 1e-6},))])
     force = lin.channels["mesh_force_n"]
     assert np.min(force) > 0.6 * np.mean(force)
@@ -376,3 +377,28 @@ def test_a_linear_case_keeps_no_per_pair_slots_and_gives_the_same_bits(monkeypat
     for a, b in zip(ref, got):
         for name in a.channels:
             assert np.array_equal(a.channels[name], b.channels[name]), name
+
+
+def test_a_case_with_backlash_is_stepped_at_the_step_its_effect_asks_for():
+    """``[solver] omega_dt`` unset: the default 0.3, or the finest step an effect declares (Effect.max_omega_dt;
+    backlash 0.05, measured in experiments/step_convergence.py); set, it is kept. Checked on the time step the
+    record reports (metadata ``solver.dt_s``), against LumpedModel.time_step_s of the same model; and the
+    value is checked like any other field."""
+    from datagen.case_options import DEFAULT_OMEGA_DT
+    from datagen.simulate import prepare
+
+    base = Case(pair=SPUR, operating=OperatingPoint(1000.0, 20.0), duration_s=0.07, fs_hz=20000.0,
+                solver=SolverOptions(method="transient", transient_s=0.01))
+    bl = replace(base, effects=({"name": "backlash", "backlash_m": 50e-6},))
+    pinned = replace(bl, solver=replace(bl.solver, omega_dt=0.3))
+    lin_s, bl_s, pin_s = simulate([base, bl, pinned])
+    assert DEFAULT_OMEGA_DT == 0.3
+    assert [prepare(c).omega_dt for c in (base, bl, pinned)] == [0.3, 0.05, 0.3]
+    model = prepare(base).model
+    dt_lin, dt_bl = lin_s.metadata["solver"]["dt_s"], bl_s.metadata["solver"]["dt_s"]
+    assert 0.5 * model.time_step_s(0.3) < dt_lin <= model.time_step_s(0.3) * (1 + 1e-12)
+    assert 0.5 * model.time_step_s(0.05) < dt_bl <= model.time_step_s(0.05) * (1 + 1e-12)
+    assert pin_s.metadata["solver"]["dt_s"] == pytest.approx(lin_s.metadata["solver"]["dt_s"], rel=1e-12)
+    assert "omega_dt" not in bl.to_dict()["solver"]          # unset stays unset in the case file
+    with pytest.raises(InputError, match="solver.omega_dt"):
+        SolverOptions(omega_dt=0.0)

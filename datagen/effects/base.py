@@ -220,6 +220,10 @@ class Effect:
     #: sidebands, no other orders): a comparison that claims it warns that two models of one healthy pair differ
     #: there too (:mod:`compare.workflow`)
     mesh_harmonics_only: ClassVar[bool] = False
+    #: the coarsest ``omega_max dt`` at which this effect's records are converged, for an effect whose records need
+    #: a finer step than the default 0.3 (a law whose pairs lose contact); a case that leaves ``[solver] omega_dt``
+    #: unset is stepped at the finest its effects ask for (:meth:`datagen.case_options.SolverOptions.step_for`)
+    max_omega_dt: ClassVar[float | None] = None
 
     def __post_init__(self):
         for f in fields(self):
