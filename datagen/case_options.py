@@ -37,7 +37,8 @@ DEFAULT_OMEGA_DT = 0.3
 
 @dataclass(frozen=True)
 class SolverOptions:
-    """Numerical options: ``omega_dt`` (w_max dt; unset: :meth:`step_for` the case's effects), ``method`` (auto|periodic|transient), ``transient_s`` (s),
+    """Numerical options: ``omega_dt`` (w_max dt; unset: :meth:`step_for` the case's effects), ``method``
+    (auto|periodic|transient), ``transient_s`` (s),
     ``mesh_angle``: where the mesh stiffness and error are read, at the pinion's actual angle ("dynamic": the
     nominal rotation plus its vibration ``phi_1``, so a gear that follows a transmission error shifts its mesh
     timing) or at the nominal rotation plus the static wind-up ("nominal": the classic linear time-varying
