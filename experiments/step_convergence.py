@@ -10,7 +10,7 @@ numerical error into every fit made at it.
 Source of truth: the integrator itself at a 12x finer step (no outside reference: these records are nonlinear).
 Cases: linear and nonlinear mesh laws (backlash, Hertz) on the spur and the helical preset, light loads where
 the teeth lose contact, the drive trains of ``compare.synthetic``. Run: ``python experiments/step_convergence.py``
-(about 3 min on 2 cores); the last line is JSON.
+(about 5 min on 2 cores for the nine cases); the last line is JSON.
 
 Measured at stop 49 (the step the attribution searches at is 0.5, ``AttributionSettings.search_solver``; the
 default is 0.3): linear and spur records are converged at 0.5; the helical pair with backlash at 2 N m (its pairs
