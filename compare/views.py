@@ -72,15 +72,24 @@ def _tooth_powers(y: np.ndarray, z: int) -> np.ndarray:
     return (sq[edges[1:]] - sq[edges[:-1]]) / np.diff(edges)
 
 
+def _in_bands(n_bins: int, plan: Plan) -> np.ndarray:
+    """Pinion-spectrum bins inside the analysed band range."""
+    fbins = np.arange(n_bins) * plan.bin_hz
+    return (fbins > plan.bands_hz[0][0]) & (fbins < plan.bands_hz[-1][1])
+
+
+def _noise_floor(pp: np.ndarray, no_order: np.ndarray, in_bands: np.ndarray) -> float:
+    """Mean noise power per bin of a pinion-angle spectrum: the floor quantile of its non-order bins in the
+    analysed range (of all its bins there when fewer than 16 are no order)."""
+    sel = pp[no_order & in_bands] if np.count_nonzero(no_order & in_bands) >= 16 else pp[in_bands]
+    return float(np.quantile(sel, FLOOR_QUANTILE) / EXP_Q)
+
+
 def _pinion_part(xp: np.ndarray, plan: Plan):
     """Power spectrum, its floor, the non-order mask and the noise floor of a pinion-angle record."""
     pp = power_spectrum(xp)
     no_order = non_order(pp.size, plan)
-    fl_p = smooth_floor(pp, no_order)
-    fbins = np.arange(pp.size) * plan.bin_hz
-    in_bands = (fbins > plan.bands_hz[0][0]) & (fbins < plan.bands_hz[-1][1])
-    sel = pp[no_order & in_bands] if np.count_nonzero(no_order & in_bands) >= 16 else pp[in_bands]
-    return pp, fl_p, no_order, float(np.quantile(sel, FLOOR_QUANTILE) / EXP_Q)
+    return pp, smooth_floor(pp, no_order), no_order, _noise_floor(pp, no_order, _in_bands(pp.size, plan))
 
 
 def pinion_lines(x: np.ndarray, fs_hz: float, track: AngleTrack, plan: Plan) -> SignalViews:
@@ -107,7 +116,7 @@ class _Layout:
     in_bands: np.ndarray      # pinion-spectrum bins inside the analysed band range
     order_p: tuple            # (location rows, lower bin, upper bin, floor bin): lines on the pinion spectrum
     order_w: tuple            # the same on the wheel spectrum
-    band_lines: tuple         # (rows, centre bin): lines at no shaft order, the largest of 3 bins
+    band_lines: tuple         # (rows, lower, upper, centre bin): lines at no shaft order, the largest of 3 bins
     bands: tuple              # ((row, bins of the band that are no order, or all of its bins), ...)
     envelope: tuple           # (rows, lower bin, upper bin, floor bin, whether the level is the largest of 3 bins)
     tsa: tuple                # ((row, shaft, key), ...)
@@ -127,8 +136,6 @@ def _line_bins(b: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
 def _layout(plan: Plan, n_p: int, n_w: int) -> _Layout:
     R, Rw, zp, zw = plan.n_revs, plan.n_revs_wheel, plan.z_pinion, plan.z_wheel
     no_order = non_order(n_p, plan)
-    fbins = np.arange(n_p) * plan.bin_hz
-    in_bands = (fbins > plan.bands_hz[0][0]) & (fbins < plan.bands_hz[-1][1])
     rows = {k: [] for k in ("op", "ow", "bl", "env", "env_line")}
     pos = {k: [] for k in rows}
     bands, tsa, stats = [], [], []
@@ -168,7 +175,7 @@ def _layout(plan: Plan, n_p: int, n_w: int) -> _Layout:
     env_lines, env_three = lines("env", n_p), three_bins("env_line", n_p)
     envelope = tuple(np.concatenate([a, b]) for a, b in zip(env_lines, env_three)) + (
         np.concatenate([np.zeros(env_lines[0].size, bool), np.ones(env_three[0].size, bool)]),)
-    return _Layout(no_order=no_order, no_order_w=non_order_wheel(n_w, plan), in_bands=in_bands,
+    return _Layout(no_order=no_order, no_order_w=non_order_wheel(n_w, plan), in_bands=_in_bands(n_p, plan),
                    order_p=lines("op", n_p), order_w=lines("ow", n_w), band_lines=three_bins("bl", n_p),
                    bands=tuple(bands), envelope=envelope, tsa=tuple(tsa), stats=tuple(stats))
 
@@ -185,8 +192,7 @@ def analyse(x: np.ndarray, fs_hz: float, track: AngleTrack, plan: Plan, *, keep_
     pw = power_spectrum(rec.wheel.ravel())
     lay = _layout(plan, pp.size, pw.size)
     fl_p = smooth_floor(pp, lay.no_order)
-    sel = pp[lay.no_order & lay.in_bands] if np.count_nonzero(lay.no_order & lay.in_bands) >= 16 else pp[lay.in_bands]
-    noise_floor = float(np.quantile(sel, FLOOR_QUANTILE) / EXP_Q)
+    noise_floor = _noise_floor(pp, lay.no_order, lay.in_bands)
     R, Rw = plan.n_revs, plan.n_revs_wheel
     zp, zw = plan.z_pinion, plan.z_wheel
     env = envelope_power(xp, plan)
