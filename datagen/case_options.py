@@ -72,7 +72,7 @@ class SolverOptions:
         pairs part at their contact edges, is converged only at 0.05; experiments/step_convergence.py)."""
         if self.omega_dt is not None:
             return float(self.omega_dt)
-        asked = [e.max_omega_dt for e in effects if getattr(e, "max_omega_dt", None) is not None]
+        asked = [e.max_omega_dt for e in effects if e.max_omega_dt is not None]
         return float(min([DEFAULT_OMEGA_DT, *asked]))
 
 

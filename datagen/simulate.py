@@ -279,8 +279,9 @@ def prepare(case: Case) -> dynamics.DynamicCase:
                         torque_nm=case.operating.torque_nm)
     return dynamics.DynamicCase(model=model, record=rec, effects=case.effects, ctx=ctx,
                                 speed_rpm=case.operating.speed_rpm, torque_nm=case.operating.torque_nm,
-                                fs_hz=case.fs_hz, duration_s=case.duration_s, omega_dt=case.solver.step_for(case.effects),
-                                method=case.solver.method, transient_s=case.solver.transient_s,
+                                fs_hz=case.fs_hz, duration_s=case.duration_s,
+                                omega_dt=case.solver.step_for(case.effects), method=case.solver.method,
+                                transient_s=case.solver.transient_s,
                                 mesh_angle=case.solver.mesh_angle, step_limit=case.solver.step_limit)
 
 
