@@ -4,7 +4,8 @@
 - ``sources``         signal sets from a generated dataset or from measurement files (+ labels.csv), with
                       each measurement's speed measured (tachometer or mesh harmonics)
 - ``order_tracking``  a measurement's varying speed followed and the record resampled to constant speed
-- ``unknown_rate``    records whose sampling rate is unknown (the SpectraQuest CSVs): mesh-frequency estimate
+- ``unknown_rate``    records whose sampling rate is unknown (the SpectraQuest CSVs): mesh-frequency estimate,
+                      tooth count from the sidebands
 - ``toy``             a small labelled toy signal set for tests, benchmarks and examples
 - ``representations`` network inputs: raw segment, envelope spectrum, TSA, order and mesh-order spectra
 - ``representation_spec`` which representation and its size (:class:`RepresentationSpec`, checked when built)
