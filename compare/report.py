@@ -36,9 +36,10 @@ def _num(v):
 
 
 def document(comparison, attribution=None, ledger_rows=(), *, measurement_path: str | None = None,
-             model_path: str | None = None, escalation: dict | None = None) -> dict:
+             model_path: str | None = None, escalation: dict | None = None, pair_check: dict | None = None) -> dict:
     """The JSON document of a comparison (schema: :data:`compare.schema.SCHEMA`); ``escalation``: how the
-    calibration mode played out (:meth:`compare.escalation.Staged.summary`)."""
+    calibration mode played out (:meth:`compare.escalation.Staged.summary`); ``pair_check``: the measurement
+    against the sidecar's pair (:func:`compare.pair_check.check_pair`)."""
     ref, ev = comparison.reference, comparison.evaluation
     m = ref.measurement
     plan = ref.plan
@@ -74,6 +75,8 @@ def document(comparison, attribution=None, ledger_rows=(), *, measurement_path: 
     }
     if escalation is not None:
         doc["escalation"] = escalation
+    if pair_check is not None:
+        doc["pair_check"] = pair_check
     return json.loads(json.dumps(doc, default=_default))
 
 
@@ -118,6 +121,14 @@ def _fmt(v, nd=3):
     return str(v)
 
 
+def _pair_html(check: dict | None) -> list[str]:
+    """The pair check's message (compare.pair_check), when it has one."""
+    from compare.pair_check import pair_message
+
+    msg = pair_message(check) if check else None
+    return [] if msg is None else [f"<p><b>Gear pair:</b> {html.escape(msg)}</p>"]
+
+
 def _calibration_html(cal: dict | None, escalation: dict | None = None) -> list[str]:
     """The nuisance-calibration section (compare.calibration; why it ran: compare.escalation)."""
     why = []
@@ -159,6 +170,7 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
              f"(nominal {m['speed_rpm_nominal']:g}, refined from the {m['speed_method']}), torque {m['torque_nm']:g} N m.</p>",
              f"<p>Model: <code>{html.escape(doc['model']['description'])}</code>. Sensor gain fitted: "
              f"{doc['gain_db']:+.2f} dB.</p>",
+             *_pair_html(doc.get("pair_check")),
              *_calibration_html(doc.get("calibration"), doc.get("escalation")),
              "<h2>Error</h2>",
              _table(["view", "error (dB)", "raw error E (dB)", "noise error N (dB)"],

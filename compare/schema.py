@@ -304,6 +304,35 @@ SCHEMA = {
                                               "before": {"type": "string"},
                                               "rivals": {"type": "array", "items": {"type": "string"}},
                                               "note": {"type": "string"}}}}},
+        "pair_check": {
+            "type": "object",
+            "description": "the measurement against the sidecar's gear pair (compare.pair_check): whether a mesh "
+                           "line stands out where the comparison reads it, and the tooth count whose shaft "
+                           "sidebands the spectrum carries most strongly; absent from documents written before it",
+            "required": ["mesh_hz", "mesh_family_db", "questioned"],
+            "properties": {"mesh_hz": {"type": "number", "description": "pinion teeth x the refined speed"},
+                           "mesh_family_db": {"type": "number",
+                                              "description": "how much more the harmonic family there stands out "
+                                                             "than families 1-6 % beside it (dB); below "
+                                                             "compare.pair_check.MESH_FAMILY_DB: no mesh line"},
+                           "speed_method": {"type": "string"},
+                           "sidecar": {"type": "object", "description": "pinion and wheel teeth of the sidecar"},
+                           "z_measured": {"type": ["integer", "null"],
+                                          "description": "the count of the strongest sideband comb (null: no mesh "
+                                                         "line to read it around)"},
+                           "score_db": _NUM,
+                           "sidecar_score_db": {"type": ["object", "null"],
+                                                "description": "the comb contrast of each sidecar count (within "
+                                                               "the record's resolution)"},
+                           "agrees": {"type": "boolean",
+                                      "description": "z_measured is one of the sidecar's counts"},
+                           "other_family": {"type": "boolean",
+                                            "description": "a decisive sideband family that is no shaft of the "
+                                                           "pair: a wrong pair, or another modulation (a "
+                                                           "fluctuation)"},
+                           "questioned": {"type": "boolean",
+                                          "description": "no mesh line where the comparison reads it: the pair or "
+                                                         "the speed is wrong"}}},
         "escalation": {
             "type": "object",
             "description": "how the calibration mode played out (compare.escalation); absent from documents "

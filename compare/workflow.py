@@ -35,6 +35,7 @@ from compare.escalation import compare_and_attribute, reason_text
 from compare.joint_refit import joint_refit_message
 from compare.ledger import append_row, last_candidate, ledger_path, make_row, read_ledger
 from compare.measurement import load_measurement
+from compare.pair_check import check_pair, pair_message
 from compare.model import ComparisonModel, parse_add
 from compare.response import attach_responses
 from compare.report import document, write_html, write_json
@@ -105,6 +106,9 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
         for c in candidates:
             get(c)
     ref = prepare_reference(measurement)
+    pair_check = check_pair(measurement, ref.speed)
+    if (msg := pair_message(pair_check)) is not None:
+        messages.append(msg)
     if refit:
         from compare.refit import refit_effects, refit_message
 
@@ -164,7 +168,7 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
     append_row(lpath, row)
     rows = rows + [row]
     doc = document(comparison, att, rows, measurement_path=str(measurement_path), model_path=str(mpath),
-                   escalation=escalation)
+                   escalation=escalation, pair_check=pair_check)
     if json_path is not None:
         write_json(doc, json_path)
         messages.append(f"JSON written: {json_path}")
