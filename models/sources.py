@@ -24,7 +24,10 @@ three times as wide lies within that half order (one search, ~40 ms for a 1 s re
 ``speed_rpm_sidecar`` and ``speed_method`` (``tacho``, ``spectrum`` or ``sidecar``). A speed that varies within
 the record is then followed: the record is resampled to its constant mean speed (:mod:`models.order_tracking`)
 where its mesh phase strays from the constant-speed line by more than
-:data:`~models.order_tracking.TRACK_MIN_RAD` (labels ``mesh_phase_dev_rad``, ``order_tracked``).
+:data:`~models.order_tracking.TRACK_MIN_RAD` (labels ``mesh_phase_dev_rad``, ``order_tracked``). At a measured
+speed the sidecar's pair is checked too (:func:`pair_warning`, :mod:`compare.pair_check`): a record with no mesh
+line at ``z1`` x its speed, or whose strongest sideband comb is no shaft of the pair, carries a warning
+(``pair_note``) into every prediction made from it.
 """
 from __future__ import annotations
 
@@ -155,6 +158,18 @@ def measured_speed(measurement) -> tuple[float, str, str]:
                                 "or the measured speed)")
 
 
+def pair_warning(measurement, speed_rpm: float, method: str) -> str:
+    """The pair check of :mod:`compare.pair_check` at a measured speed: its message (a mesh line missing where the
+    sidecar's pair puts it, or a sideband family that is no shaft of the pair), or "" ."""
+    from compare.pair_check import check_pair, pair_message
+    from compare.speed import SpeedEstimate, constant_track
+
+    fr = speed_rpm / 60.0
+    est = SpeedEstimate(speed_rpm, float(measurement.speed_rpm), method,
+                        constant_track(measurement.n_samples, measurement.fs_hz, fr))
+    return pair_message(check_pair(measurement, est)) or ""
+
+
 def tracked_record(measurement, speed_rpm: float, method: str) -> tuple[np.ndarray, float, float]:
     """``(record, speed_rpm, mesh phase deviation in rad)`` of a measurement whose mean speed was measured by
     ``method`` (:func:`measured_speed`): resampled to its constant mean speed where its mesh phase strays more
@@ -198,11 +213,12 @@ def load_measurements(paths: list[str | Path], *, refine_speed: bool = True) -> 
     rows, records = [], []
     for m, f in zip(ms, files):
         speed, method, note = measured_speed(m) if refine_speed else (float(m.speed_rpm), "sidecar", "")
+        pair_note = pair_warning(m, speed, method) if method != "sidecar" else ""
         x, speed, dev = tracked_record(m, speed, method) if refine_speed else (m.signal, speed, np.nan)
         records.append(x)
         rows.append({"file": f.name, "speed_rpm": speed, "torque_nm": float(m.torque_nm),
                      "speed_rpm_sidecar": float(m.speed_rpm), "speed_method": method, "speed_note": note,
-                     "mesh_phase_dev_rad": dev, "order_tracked": bool(dev > TRACK_MIN_RAD)})
+                     "pair_note": pair_note, "mesh_phase_dev_rad": dev, "order_tracked": bool(dev > TRACK_MIN_RAD)})
     refs = _references(ms, files, rows, refine_speed) if any(m.sidecar.reference for m in ms) else None
     n = min(r.size for r in records + (refs or []))
     x = np.stack([np.asarray(r[:n], dtype=np.float32) for r in records])

@@ -104,3 +104,25 @@ def test_the_compare_run_reports_the_check_in_its_messages_and_json(spur_rig, tm
     out = run(csv, attribution=False, json_path=tmp_path / "c.json")
     assert out.document["pair_check"]["questioned"]
     assert any(s.startswith("no mesh line") for s in out.messages)
+
+
+def test_a_classifiers_measurement_with_a_wrong_pair_carries_the_warning_into_its_predictions(spur_rig, tmp_path):
+    """gearpit predict/evaluate read measurement files through models.sources.load_measurements: a file whose
+    sidecar names the wrong pair gets the pair check's message as ``pair_note``, and check_input turns it into a
+    per-record warning; the right pair gets none."""
+    from compare.workflow import write_rig_files
+    from models.data import PairInfo
+    from models.sources import load_measurements
+    from models.spec import ModelSpec, check_input
+
+    good = write_rig_files(spur_rig, tmp_path / "good")
+    bad = write_rig_files(spur_rig, tmp_path / "bad")
+    side = bad.with_suffix(".toml")
+    side.write_text(side.read_text().replace('pair = "spur-gds"', 'pair = "helical-dct"'))
+    assert load_measurements([good]).labels["pair_note"][0] == ""
+    data = load_measurements([bad])
+    assert data.labels["pair_note"][0].startswith("no mesh line")
+    spec = ModelSpec(model_type="rf", task="multi", fs_hz=data.fs_hz, n_samples=data.n_samples,
+                     pair=PairInfo("helical-dct", 17, 60), representation={}, severity_classes=["healthy"],
+                     teeth_classes=["0"], severity_scale=1.0)
+    assert "no mesh line" in check_input(spec, data)[0]
