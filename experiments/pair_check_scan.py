@@ -31,7 +31,8 @@ def measurements():
     for name, ex in HIDDEN_EXAMPLES.items():
         yield f"test rig {name}", hidden_effect_measurement(name)[0]
         for rig, (base, less_db) in OTHER_RIGS.items():
-            yield f"{rig} {name}", hidden_effect_measurement(name, seed=11, **{**base, "snr_db": ex.snr_db - less_db})[0]
+            rig_kw = {**base, "snr_db": ex.snr_db - less_db}
+            yield f"{rig} {name}", hidden_effect_measurement(name, seed=11, **rig_kw)[0]
     for name, (over, _, _) in FOREIGN_CASES.items():
         yield f"foreign {name}", foreign_measurement(ForeignRig(seed=5, **over))
     for name, (kw, _) in CASES.items():
