@@ -61,6 +61,13 @@ SCHEMA = {
                            "speed_rpm": {"type": "number", "description": "refined mean pinion speed"},
                            "speed_rpm_nominal": {"type": "number"},
                            "speed_method": {"enum": ["tacho", "spectrum", "nominal"]},
+                           "speed_drift_rad": {"type": ["number", "null"],
+                                               "description": "without a tachometer: RMS deviation of the slow "
+                                                              "mesh phase from a constant speed (rad, first mesh "
+                                                              "harmonic; compare.speed.drift_track); null: not "
+                                                              "measured (tachometer, or no two clear harmonics)"},
+                           "speed_tracked": {"type": "boolean",
+                                             "description": "the measurement's views follow that drift"},
                            "torque_nm": {"type": "number"}, "pair": {"type": "object"}}},
         "model": {"type": "object", "required": ["description", "sensor", "effects"],
                   "properties": {"path": _STR, "description": {"type": "string"}, "sensor": {"type": "string"},

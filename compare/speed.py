@@ -10,7 +10,10 @@
   ``S(f) = sum_m |X(m z1 f)|^2`` over the mesh harmonics below 0.45 fs (at most 10),
   searched within ``+/- search_fraction`` of the nominal speed, first on a
   zero-padded FFT, then by a bounded scalar search on the exact windowed DFT
-  (no scalloping). The track is then a constant speed.
+  (no scalloping). The track is then a constant speed, unless the mesh phase
+  drifts from it by more than :data:`models.order_tracking.TRACK_MIN_RAD`
+  slower than about half the wheel's rotation (:func:`drift_track`): that drift
+  is followed, as the tachometer's track follows it.
 
 References
 ----------
@@ -26,11 +29,16 @@ from scipy.optimize import minimize_scalar
 
 from features.spectra import line_amplitudes
 from features.tsa import AngleTrack, tacho_pulse_times
-from gearpit.errors import require
+from gearpit.errors import InputError, require
 
 TWO_PI = 2.0 * np.pi
 #: RMS deviation (rad) of the pulse angles from a constant speed above which the track follows a drift
 DRIFT_RAD = 0.02
+#: without a tachometer, a drift is followed only where the two harmonics it is read from differ by less than this
+#: fraction of it (drift_track)
+DRIFT_AGREEMENT = 0.5
+#: ... and only from mesh harmonics standing this far (dB) above their local floor (the median within 4 shaft orders)
+DRIFT_LINE_DB = 20.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -52,6 +60,10 @@ class SpeedEstimate:
     nominal_rpm: float
     method: str
     track: AngleTrack
+    #: without a tachometer: the RMS deviation (rad, mesh phase) of the slow part of the mesh phase from a constant
+    #: speed (:func:`drift_track`), and whether the track follows it; None when not measured
+    drift_rad: float | None = None
+    tracked: bool = False
 
     @property
     def fr_pinion_hz(self) -> float:
@@ -126,5 +138,70 @@ def refine_speed(measurement, *, search_fraction: float = 0.05) -> SpeedEstimate
         return speed_from_tacho(measurement.tacho_signal, measurement.fs_hz, z_pinion=z1, z_wheel=z2,
                                 pulses_per_rev=sc.tacho_pulses_per_rev, shaft=sc.tacho_shaft,
                                 nominal_rpm=measurement.speed_rpm)
-    return speed_from_spectrum(measurement.signal, measurement.fs_hz, z_pinion=z1, nominal_rpm=measurement.speed_rpm,
-                               search_fraction=search_fraction)
+    est = speed_from_spectrum(measurement.signal, measurement.fs_hz, z_pinion=z1, nominal_rpm=measurement.speed_rpm,
+                              search_fraction=search_fraction)
+    drift, track = drift_track(measurement.signal, measurement.fs_hz, est.speed_rpm / 60.0, z1, z2)
+    return SpeedEstimate(est.speed_rpm, est.nominal_rpm, est.method, track or est.track, drift, track is not None)
+
+
+def drift_track(x: np.ndarray, fs_hz: float, fr_hz: float, z_pinion: int, z_wheel: int) -> tuple[float, AngleTrack | None]:
+    """The slow drift of the pinion speed within a record without a tachometer, and the angle track that follows
+    it when it is real and matters: ``(drift_rad, track or None)``.
+
+    The pinion angle from the phase of a mesh harmonic (:func:`models.order_tracking.mesh_angle`: complex
+    demodulation, low-passed over two pinion revolutions), low-passed again over two revolutions of the wheel (a
+    Hann window, renormalised at the ends): what is left is the drift slower than about half the wheel's
+    rotation. A fluctuation faster than that (the speed and torque fluctuations the attribution fits, a local
+    fault's once-per-revolution modulation) stays in the record, as it would stay in the model; what is slower
+    has no place in the model (it runs at the constant mean speed), smears every order and the synchronous
+    averages, and is followed, as the tachometer's track follows a drift.
+
+    The angle is read from the two mesh harmonics that stand out most from their local floor, both at least
+    :data:`DRIFT_LINE_DB` above it (a line near the noise has a phase that slips), and the drift is believed only
+    where both agree: a real change of speed moves every harmonic's phase by the same angle. ``drift_rad`` is the RMS deviation of the slow angle (their mean)
+    from the constant-speed line, in radians of the first mesh harmonic; the track follows it when that exceeds
+    :data:`models.order_tracking.TRACK_MIN_RAD` (0.1 rad: within what the demodulation scatters on a
+    constant-speed record) and the two harmonics differ by less than :data:`DRIFT_AGREEMENT` of it; else the
+    track is None and the constant-speed one stays (bit for bit).
+
+    Measured: the SpectraQuest recording h30hz50 (a 32/80 stage at ~30 Hz, no tachometer) drifts by 0.50 rad RMS,
+    mostly below 1 Hz, read alike from the first and third mesh harmonics (35 and 27 dB above their floor; they
+    differ by 0.15 rad; the even harmonics, 8-22 dB, by 1.2 rad: another source shares those lines). On
+    gearpit's 49 simulated rigs (constant mean speed, fluctuations included) the strongest harmonic among the
+    first five gave up to 1.05 rad on a weak helical mesh (phase slips of a line 7.5 dB above its floor); with
+    the rule above none is tracked (``experiments/pair_check_scan.py`` prints every rig's drift).
+    """
+    from scipy.signal import fftconvolve
+
+    from models.order_tracking import TRACK_MIN_RAD, mesh_angle, phase_deviation_rad
+
+    a = np.asarray(x, dtype=float) - np.mean(x)
+    n = a.size
+    fm = z_pinion * fr_hz
+    harm = [m for m in range(1, 41) if m * fm + fr_hz < 0.45 * fs_hz]
+    if len(harm) < 2:
+        return float("nan"), None
+    spec = np.abs(np.fft.rfft(a * np.hanning(n)))
+    half = max(4, int(round(0.5 * fr_hz * n / fs_hz)))         # half a shaft order, in bins
+
+    def prominence(m: int) -> float:
+        i = int(round(m * fm * n / fs_hz))
+        return float(spec[i] / (np.median(spec[max(i - 8 * half, 0):i + 8 * half + 1]) + 1e-300))
+
+    best = [m for m in sorted(harm, key=prominence, reverse=True)[:2] if prominence(m) >= 10 ** (DRIFT_LINE_DB / 20)]
+    if len(best) < 2:                                         # one phase alone cannot be confirmed
+        return float("nan"), None
+    t = np.arange(n) / fs_hz
+    w = np.hanning(max(3, int(round(2 * fs_hz * z_wheel / (z_pinion * fr_hz)))))      # two wheel revolutions
+    norm = fftconvolve(np.ones(n), w, mode="same")
+    slows = []
+    for m in best:
+        angle, _ = mesh_angle(a, fs_hz, fr_hz, z_pinion, harmonic=m)
+        line = np.polyval(np.polyfit(t, angle, 1), t)
+        slows.append(line + fftconvolve(angle - line, w, mode="same") / norm)
+    slow = 0.5 * (slows[0] + slows[1])
+    drift = phase_deviation_rad(slow, fs_hz, z_pinion)
+    disagree = phase_deviation_rad(slows[0] - slows[1], fs_hz, z_pinion)
+    if not (drift > TRACK_MIN_RAD and disagree < DRIFT_AGREEMENT * drift and np.all(np.diff(slow) > 0)):
+        return float(drift), None
+    return float(drift), AngleTrack(t, slow - slow[0])

@@ -106,6 +106,10 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
         for c in candidates:
             get(c)
     ref = prepare_reference(measurement)
+    if ref.speed.tracked:
+        messages.append(f"the speed drifts within the record ({ref.speed.drift_rad:.2f} rad RMS of the mesh phase, "
+                        "slower than half the wheel's rotation; read from two mesh harmonics that agree): the "
+                        "measurement's views follow it, the model runs at the mean speed")
     pair_check = check_pair(measurement, ref.speed)
     if (msg := pair_message(pair_check)) is not None:
         messages.append(msg)

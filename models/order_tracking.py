@@ -43,9 +43,11 @@ TWO_PI = 2.0 * np.pi
 TRACK_MIN_RAD = 0.1
 
 
-def mesh_angle(x: np.ndarray, fs_hz: float, fr_hz: float, z_pinion: int, max_harmonic: int = 5) -> tuple[np.ndarray, int]:
+def mesh_angle(x: np.ndarray, fs_hz: float, fr_hz: float, z_pinion: int, max_harmonic: int = 5, *,
+               harmonic: int | None = None) -> tuple[np.ndarray, int]:
     """Pinion angle (rad, arbitrary offset) at every sample of ``x`` from the phase of its strongest mesh
-    harmonic ``m`` (1 .. ``max_harmonic``, below 0.45 fs), and ``m``: the record is shifted down by ``m z1 fr``
+    harmonic ``m`` (1 .. ``max_harmonic``, below 0.45 fs; or ``harmonic`` when given), and ``m``: the record is
+    shifted down by ``m z1 fr``
     (complex demodulation) and low-passed by a Hann window two shaft revolutions long, whose spectrum is zero at
     every multiple of the shaft frequency, so a local fault's sidebands drop out; at the ends the window's
     available part is renormalised (a real, symmetric kernel: the phase stays unbiased where it is cut)."""
@@ -55,7 +57,8 @@ def mesh_angle(x: np.ndarray, fs_hz: float, fr_hz: float, z_pinion: int, max_har
     harm = [m for m in range(1, max_harmonic + 1) if m * fm + fr_hz < 0.45 * fs_hz]
     require(bool(harm), "speed_rpm", 60.0 * fr_hz, f"a mesh frequency below 0.45 fs ({0.45 * fs_hz:g} Hz)")
     spec = np.abs(np.fft.rfft(a * np.hanning(n)))
-    m = max(harm, key=lambda h: float(spec[int(round(h * fm * n / fs_hz))]))
+    m = harmonic or max(harm, key=lambda h: float(spec[int(round(h * fm * n / fs_hz))]))
+    require(m * fm + fr_hz < 0.45 * fs_hz, "harmonic", m, f"a mesh harmonic below 0.45 fs ({0.45 * fs_hz:g} Hz)")
     carrier = TWO_PI * m * fm * np.arange(n) / fs_hz
     win = np.hanning(max(3, int(round(2 * fs_hz / fr_hz))))
     base = fftconvolve(a * np.exp(-1j * carrier), win, mode="same") / fftconvolve(np.ones(n), win, mode="same")

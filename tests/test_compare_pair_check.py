@@ -85,6 +85,8 @@ def test_the_spectraquest_gearbox_is_told_from_a_pair_that_is_not_it():
     sampling rate assumed 12.9 kHz: only ratios matter): its 32-tooth stage is found."""
     from models.unknown_rate import estimate_mesh_cps
 
+    if not (DATA / "b30hz50.csv").exists():          # CI has ../shared beside the clone; a bare clone elsewhere not
+        pytest.skip("shared data not present")
     x = np.loadtxt(DATA / "b30hz50.csv", delimiter=",", skiprows=1, usecols=1)
     fs = 12900.0
     mesh_hz = estimate_mesh_cps(x) * fs
