@@ -49,6 +49,7 @@ import math
 
 import numpy as np
 
+from gearpit.errors import InputError
 from models.unknown_rate import _log_power, tooth_count_scores
 
 #: comb contrast (dB) above which a tooth count is a clear sideband family of the record
@@ -101,12 +102,20 @@ def check_pair(measurement, speed) -> dict:
     out = {"mesh_hz": float(z1 * fr_cps * fs), "mesh_family_db": mesh_line_db(logp, n_fft, z1 * fr_cps),
            "speed_method": speed.method, "sidecar": {"pinion": z1, "wheel": z2}}
     fm_cps = z1 * fr_cps
+    blank = {"z_measured": None, "score_db": None, "sidecar_score_db": None, "agrees": False, "other_family": False}
+    if not math.isfinite(out["mesh_family_db"]):
+        # no mesh harmonic below 0.45 fs (a low sampling rate): nothing to check, and nothing questioned
+        out.update({**blank, "questioned": False})
+        return out
     if out["mesh_family_db"] < MESH_FAMILY_DB:
         # no mesh line where the comparison reads it: the sideband comb would be read around nothing
-        out.update({"z_measured": None, "score_db": None, "sidecar_score_db": None, "agrees": False,
-                    "other_family": False, "questioned": True})
+        out.update({**blank, "questioned": True})
         return out
-    scores = tooth_count_scores(x, fm_cps, z_range=(6, max(200, 2 * max(z1, z2))), n_sidebands=N_SIDEBANDS)
+    try:
+        scores = tooth_count_scores(x, fm_cps, z_range=(6, max(200, 2 * max(z1, z2))), n_sidebands=N_SIDEBANDS)
+    except InputError:      # no harmonic with its sidebands below Nyquist, or a record too short to resolve them
+        out.update({**blank, "questioned": False})
+        return out
     best = max(scores, key=scores.get)
     near = {}
     agrees = False

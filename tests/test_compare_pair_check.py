@@ -128,3 +128,17 @@ def test_a_classifiers_measurement_with_a_wrong_pair_carries_the_warning_into_it
                      pair=PairInfo("helical-dct", 17, 60), representation={}, severity_classes=["healthy"],
                      teeth_classes=["0"], severity_scale=1.0)
     assert "no mesh line" in check_input(spec, data)[0]
+
+
+def test_a_record_whose_mesh_is_above_the_analysed_band_is_not_questioned():
+    """A sampling rate so low that no mesh harmonic lies below 0.45 fs (the pair check has nothing to read):
+    nothing is questioned and nothing fails; a record too short for any sideband comb the same."""
+    from compare.speed import SpeedEstimate, constant_track
+
+    m = rig_measurement([], pair="spur-gds", duration_s=2.0)
+    fs = 900.0                     # the 29-tooth mesh at 1000 rpm is 483 Hz > 0.45 x 900 Hz
+    sc = dataclasses.replace(m.sidecar, fs_hz=fs, tacho=None)
+    x = m.channels["acc"][: int(2.0 * fs)]
+    low = measurement_from_arrays({"acc": x}, sc, source="decimated by picking")
+    c = check_pair(low, SpeedEstimate(1000.0, 1000.0, "nominal", constant_track(low.n_samples, fs, 1000.0 / 60)))
+    assert not c["questioned"] and c["z_measured"] is None and pair_message(c) is None
