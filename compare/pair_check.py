@@ -173,9 +173,13 @@ def pair_message(check: dict) -> str | None:
     if not check["other_family"]:
         return None
     ss = check["sidecar_score_db"]
+
+    def _db(v):          # a sidecar count the record cannot resolve has no score
+        return "unresolved" if v is None else f"{v:.1f} dB"
+
     spacing = check["mesh_hz"] / check["z_measured"]
     return (f"the strongest sideband family around the mesh is spaced {spacing:.2f} Hz, mesh / {check['z_measured']} "
             f"(comb contrast {check['score_db']:.1f} dB; the sidecar's {sc['pinion']} and {sc['wheel']} teeth: "
-            f"{ss['pinion']:.1f} and {ss['wheel']:.1f} dB): if that is a shaft, the pair is wrong (a gear of "
+            f"{_db(ss['pinion'])} and {_db(ss['wheel'])}): if that is a shaft, the pair is wrong (a gear of "
             f"{check['z_measured']} teeth); if not, it is another modulation at {spacing:.2f} Hz (a speed or torque "
             "fluctuation, which the attribution tries)")
