@@ -50,7 +50,7 @@ import math
 import numpy as np
 
 from gearpit.errors import InputError
-from models.unknown_rate import _log_power, tooth_count_scores
+from models.unknown_rate import log_power, tooth_count_scores
 
 #: comb contrast (dB) above which a tooth count is a clear sideband family of the record
 DECISIVE_DB = 6.0
@@ -98,7 +98,7 @@ def check_pair(measurement, speed) -> dict:
     x = measurement.signal
     n = measurement.n_samples
     fr_cps = speed.fr_pinion_hz / fs
-    logp, n_fft = _log_power(np.asarray(x, dtype=float), PAD)
+    logp, n_fft = log_power(np.asarray(x, dtype=float), PAD)
     out = {"mesh_hz": float(z1 * fr_cps * fs), "mesh_family_db": mesh_line_db(logp, n_fft, z1 * fr_cps),
            "speed_method": speed.method, "sidecar": {"pinion": z1, "wheel": z2}}
     fm_cps = z1 * fr_cps

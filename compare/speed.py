@@ -144,7 +144,8 @@ def refine_speed(measurement, *, search_fraction: float = 0.05) -> SpeedEstimate
     return SpeedEstimate(est.speed_rpm, est.nominal_rpm, est.method, track or est.track, drift, track is not None)
 
 
-def drift_track(x: np.ndarray, fs_hz: float, fr_hz: float, z_pinion: int, z_wheel: int) -> tuple[float, AngleTrack | None]:
+def drift_track(x: np.ndarray, fs_hz: float, fr_hz: float, z_pinion: int,
+                z_wheel: int) -> tuple[float, AngleTrack | None]:
     """The slow drift of the pinion speed within a record without a tachometer, and the angle track that follows
     it when it is real and matters: ``(drift_rad, track or None)``.
 
@@ -158,8 +159,9 @@ def drift_track(x: np.ndarray, fs_hz: float, fr_hz: float, z_pinion: int, z_whee
 
     The angle is read from the two mesh harmonics that stand out most from their local floor, both at least
     :data:`DRIFT_LINE_DB` above it (a line near the noise has a phase that slips), and the drift is believed only
-    where both agree: a real change of speed moves every harmonic's phase by the same angle. ``drift_rad`` is the RMS deviation of the slow angle (their mean)
-    from the constant-speed line, in radians of the first mesh harmonic; the track follows it when that exceeds
+    where both agree: a real change of speed moves every harmonic's phase by the same angle. ``drift_rad`` is the
+    RMS deviation of the slow angle (their mean) from the constant-speed line, in radians of the first mesh
+    harmonic; the track follows it when that exceeds
     :data:`models.order_tracking.TRACK_MIN_RAD` (0.1 rad: within what the demodulation scatters on a
     constant-speed record) and the two harmonics differ by less than :data:`DRIFT_AGREEMENT` of it; else the
     track is None and the constant-speed one stays (bit for bit).
@@ -184,11 +186,12 @@ def drift_track(x: np.ndarray, fs_hz: float, fr_hz: float, z_pinion: int, z_whee
     spec = np.abs(np.fft.rfft(a * np.hanning(n)))
     half = max(4, int(round(0.5 * fr_hz * n / fs_hz)))         # half a shaft order, in bins
 
-    def prominence(m: int) -> float:
+    prominence = {}
+    for m in harm:
         i = int(round(m * fm * n / fs_hz))
-        return float(spec[i] / (np.median(spec[max(i - 8 * half, 0):i + 8 * half + 1]) + 1e-300))
-
-    best = [m for m in sorted(harm, key=prominence, reverse=True)[:2] if prominence(m) >= 10 ** (DRIFT_LINE_DB / 20)]
+        prominence[m] = float(spec[i] / (np.median(spec[max(i - 8 * half, 0):i + 8 * half + 1]) + 1e-300))
+    best = [m for m in sorted(harm, key=prominence.get, reverse=True)[:2]
+            if prominence[m] >= 10 ** (DRIFT_LINE_DB / 20)]
     if len(best) < 2:                                         # one phase alone cannot be confirmed
         return float("nan"), None
     t = np.arange(n) / fs_hz

@@ -54,11 +54,14 @@ def mesh_angle(x: np.ndarray, fs_hz: float, fr_hz: float, z_pinion: int, max_har
     a = np.asarray(x, dtype=float) - np.mean(x)
     n = a.size
     fm = z_pinion * fr_hz
-    harm = [m for m in range(1, max_harmonic + 1) if m * fm + fr_hz < 0.45 * fs_hz]
-    require(bool(harm), "speed_rpm", 60.0 * fr_hz, f"a mesh frequency below 0.45 fs ({0.45 * fs_hz:g} Hz)")
-    spec = np.abs(np.fft.rfft(a * np.hanning(n)))
-    m = harmonic or max(harm, key=lambda h: float(spec[int(round(h * fm * n / fs_hz))]))
-    require(m * fm + fr_hz < 0.45 * fs_hz, "harmonic", m, f"a mesh harmonic below 0.45 fs ({0.45 * fs_hz:g} Hz)")
+    if harmonic is None:
+        harm = [m for m in range(1, max_harmonic + 1) if m * fm + fr_hz < 0.45 * fs_hz]
+        require(bool(harm), "speed_rpm", 60.0 * fr_hz, f"a mesh frequency below 0.45 fs ({0.45 * fs_hz:g} Hz)")
+        spec = np.abs(np.fft.rfft(a * np.hanning(n)))
+        m = max(harm, key=lambda h: float(spec[int(round(h * fm * n / fs_hz))]))
+    else:
+        m = harmonic
+        require(m * fm + fr_hz < 0.45 * fs_hz, "harmonic", m, f"a mesh harmonic below 0.45 fs ({0.45 * fs_hz:g} Hz)")
     carrier = TWO_PI * m * fm * np.arange(n) / fs_hz
     win = np.hanning(max(3, int(round(2 * fs_hz / fr_hz))))
     base = fftconvolve(a * np.exp(-1j * carrier), win, mode="same") / fftconvolve(np.ones(n), win, mode="same")

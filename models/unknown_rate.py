@@ -62,7 +62,7 @@ def estimate_mesh_cps(x: np.ndarray, *, band_cps: tuple[float, float] = (0.05, 0
     lo, hi = band_cps
     require(0 < lo < hi and hi * n_harmonics < 0.5, "band_cps", band_cps,
             f"(lo, hi) with 0 < lo < hi and hi * {n_harmonics} < 0.5")
-    logp, n = _log_power(a, pad)
+    logp, n = log_power(a, pad)
     f = np.arange(logp.size) / n
     cand = np.nonzero((f >= lo) & (f <= hi))[0]
     score = np.zeros(cand.size)
@@ -74,7 +74,7 @@ def estimate_mesh_cps(x: np.ndarray, *, band_cps: tuple[float, float] = (0.05, 0
     return float(f[cand[int(np.argmax(score))]])
 
 
-def _log_power(a: np.ndarray, pad: int) -> tuple[np.ndarray, int]:
+def log_power(a: np.ndarray, pad: int) -> tuple[np.ndarray, int]:
     """Natural-log Hann power spectrum of ``a`` zero-padded ``pad`` times, and its FFT length."""
     n = a.size * pad
     p = np.abs(np.fft.rfft((a - a.mean()) * np.hanning(a.size), n=n)) ** 2
@@ -111,7 +111,7 @@ def tooth_count_scores(x: np.ndarray, mesh_cps: float, *, z_range: tuple[int, in
     z_lo, z_hi = z_range
     require(isinstance(z_lo, (int, np.integer)) and isinstance(z_hi, (int, np.integer)) and 3 <= z_lo < z_hi,
             "z_range", z_range, "two integers 3 <= lo < hi")
-    logp, n = _log_power(a, pad)
+    logp, n = log_power(a, pad)
     db = 10.0 / np.log(10.0)
     # the strongest mesh harmonics (a housing path or a sensor's own response can bury the first ones), each at its
     # measured peak within +/- h bins of the record, so that an error of the mesh estimate does not grow with h
