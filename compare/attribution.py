@@ -43,6 +43,7 @@ from compare.fitspace import CHAIN_EFFECTS, bounds_hit, fit_space
 from compare.fitting import (explained_keys, frequency_ladder, prepared_case, record_period_s, search_group,
                              transient_groups, window_label, window_s)
 from compare.nuisance_refit import refine_nuisances, refit_args, refit_payload
+from compare.path_regime import check_asymptotes
 from compare.response import mark_shaft_locks
 from gearpit.errors import GearpitError
 
@@ -140,6 +141,9 @@ def attribute(ref: Reference, model, baseline_residual: np.ndarray, *, candidate
             c.at_bound = bounds_hit(fit_space(get(c.effect)), c.params)
     mark_shaft_locks(results, ref.measurement.pair, speed_rpm=ref.speed.speed_rpm,
                      resolution_hz=ref.fs_hz / ref.x.size)
+    for c in results:               # a housing mode beside the mesh harmonics: is it located? (3 comparisons)
+        if c.status == "fitted" and c.reduction > 0:
+            check_asymptotes(c, ref, model, settings.seed)
     results.sort(key=lambda c: -c.reduction)
     claimed = choose_claim(results, settings)
     return Attribution(candidates=results, unexplained=unexplained_of(results, disagreements, settings), elapsed_s=time.perf_counter() - t0,

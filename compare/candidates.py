@@ -153,6 +153,9 @@ class CandidateResult:
     #: a fluctuation on a shaft order ({"kind": "fluctuation", "shaft", "order"}) or a once-per-revolution error
     #: ({"kind": "revolution", "shafts"}); empty otherwise (compare.response.mark_shaft_locks, :func:`shaft_locked_twin`)
     shaft_lock: dict = field(default_factory=dict)
+    #: a fitted housing mode: whether it sits among the mesh harmonics or on its mass or stiffness line beside
+    #: them (compare.path_regime.path_regime); empty for every other effect
+    path_regime: dict = field(default_factory=dict)
     #: the claimed candidate that a rule moved the claim from ({"effect", "rule"}), None when it ranked first
     claimed_over: dict | None = None
 
@@ -205,7 +208,8 @@ class CandidateResult:
                 "model_error_db": self.model_error_db if math.isfinite(self.model_error_db) else None,
                 "joint_refit": self.joint_refit, "at_bound": dict(self.at_bound), "pinned": self.pinned,
                 "response": dict(self.response), "sideband_fit": self.sideband_fit,
-                "shaft_lock": dict(self.shaft_lock), "claimed_over": self.claimed_over}
+                "shaft_lock": dict(self.shaft_lock), "path_regime": dict(self.path_regime),
+                "claimed_over": self.claimed_over}
 
     @property
     def pinned(self) -> list[str]:

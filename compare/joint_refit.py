@@ -161,6 +161,10 @@ def refit_claim_jointly(ref, comparison, attribution, settings, *, parallel: boo
               "n_simulations": int(n_sims), "elapsed_s": time.perf_counter() - t0}
     if kept:
         _adopt(cand, ref, best, list(comparison.disagreements))
+        if cand.path_regime:         # the refit moved the housing mode: is it located there?
+            from compare.path_regime import check_asymptotes
+
+            check_asymptotes(cand, ref, comparison.model, settings.seed)
     cand.joint_refit = record
     return record
 

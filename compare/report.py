@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from compare.candidates import bound_note
+from compare.path_regime import path_regime_text
 from compare.response import response_text
 from compare.chaos import describe_interval, drivetrains_message
 from compare.escalation import reason_text
@@ -211,6 +212,8 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
                            for k, v in c["params"].items())
             if c.get("response"):
                 ps += "; " + response_text(c["response"], c["effect"])
+            if path_regime_text(c.get("path_regime", {})):
+                ps += "; " + path_regime_text(c["path_regime"])
             rows.append([c["effect"], f"{100 * c['reduction']:.1f} %", _fmt(c["error_db"]), _fmt(c["baseline_error_db"]),
                          _fmt(c.get("worst_view_rise_db")), ps, c["window"], "claimed" if c["claimed"] else "",
                          c["signature"]])

@@ -217,6 +217,35 @@ SCHEMA = {
                                                                 "order": {"type": "integer"},
                                                                 "shafts": {"type": "array", "items": {
                                                                     "enum": ["pinion", "wheel"]}}}},
+                                                        "path_regime": {
+                                                            "type": "object",
+                                                            "description": "a fitted housing mode: regime "
+                                                            "resonant (among the mesh harmonics), mass_line (below "
+                                                            "them all: only bounded above by edge_hz, damping not "
+                                                            "identified) or stiffness_line (above them all: bounded "
+                                                            "below by edge_hz); deviation_db from that asymptote; "
+                                                            "empty otherwise (compare.path_regime)",
+                                                            "properties": {
+                                                                "regime": {"enum": ["resonant", "mass_line",
+                                                                                    "stiffness_line"]},
+                                                                "housing_frequency_hz": {"type": "number"},
+                                                                "housing_damping_ratio": {"type": "number"},
+                                                                "mesh_hz": {"type": "number"},
+                                                                "top_harmonic_hz": {"type": "number"},
+                                                                "deviation_db": {"type": "number"},
+                                                                "edge_hz": {"type": ["number", "null"]},
+                                                                "asymptotes": {"type": "object",
+                                                                               "additionalProperties": _NUM,
+                                                                               "description": "excess error (dB) "
+                                                                               "with the mode moved onto each "
+                                                                               "asymptote (mass_line, "
+                                                                               "stiffness_line)"},
+                                                                "fitted_excess_db": _NUM,
+                                                                "as_well": {"type": "array", "items": {
+                                                                    "enum": ["mass_line", "stiffness_line"]},
+                                                                    "description": "asymptotes that take 90 % "
+                                                                    "of the fit's fall of the error: the mode is "
+                                                                    "not located on that side"}}},
                                                         "claimed_over": {
                                                             "type": ["object", "null"],
                                                             "required": ["effect", "rule"],

@@ -32,6 +32,7 @@ def register(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from compare.candidates import bound_note
+    from compare.path_regime import path_regime_text
     from compare.response import response_text
     from compare.chaos import describe_interval, drivetrains_message
     from compare.ledger import history_table
@@ -66,6 +67,8 @@ def run(args: argparse.Namespace) -> int:
             print(f"  {cand.effect:20s} {100 * cand.reduction:6.1f} %  {ps}{mark}")
             if cand.response:
                 print(f"  {'':20s} {'':8s} {response_text(cand.response, cand.effect)}")
+            if path_regime_text(cand.path_regime):
+                print(f"  {'':20s} {'':8s} {path_regime_text(cand.path_regime)}")
             if cand.drivetrain_intervals:
                 print(f"  {'':20s} {'':8s} {drivetrains_message(cand.effect, cand.drivetrain_intervals)}")
         for u in out.attribution.unexplained:
