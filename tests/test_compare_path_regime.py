@@ -119,3 +119,31 @@ def test_check_leaves_other_effects_alone_and_the_record_validates():
     assert "mass line" in path_regime_text(reg) and not math.isnan(reg["deviation_db"])
     with pytest.raises(jsonschema.ValidationError):
         jsonschema.validate({**d, "path_regime": {**reg, "as_well": ["sideways"]}}, item)
+
+
+def test_the_cli_json_and_report_say_the_mode_is_not_located(tmp_path, capsys):
+    """``gearpit compare`` on a file of the 80 Hz housing rig (1 s, a tachometer, sidecar 0.5 % off the speed):
+    the CLI line under the transmission path, the JSON's ``path_regime`` (valid under the schema) and the HTML
+    report all carry the statement."""
+    import json
+
+    import jsonschema
+
+    from compare.schema import SCHEMA
+    from gearpit.cli import main
+
+    m = rig_measurement([{"name": "transmission_path", **_mode(80.0, 0.05)}], duration_s=1.0)
+    t = np.arange(m.n_samples) / m.fs_hz
+    np.savetxt(tmp_path / "rig.csv", np.column_stack([t, m.channels["acc"], m.channels["tacho"]]), delimiter=",",
+               header="time_s,acc_x,tacho", comments="", fmt="%.10g")
+    (tmp_path / "rig.toml").write_text('speed_rpm = 1005.0\ntorque_nm = 50.0\npair = "spur-gds"\nsensor = "acc_x"\n'
+                                       'tacho = "tacho"\n')
+    assert main(["compare", str(tmp_path / "rig.csv"), "--candidates", "transmission_path", "--no-calibrate",
+                 "--json", str(tmp_path / "r.json"), "--report", str(tmp_path / "r.html")]) == 0
+    out = capsys.readouterr().out
+    assert "the mesh harmonics do not locate this mode" in out and "below the mesh" in out
+    doc = json.loads((tmp_path / "r.json").read_text())
+    jsonschema.validate(doc, SCHEMA)
+    (cand,) = [c for c in doc["attribution"]["candidates"] if c["effect"] == "transmission_path"]
+    assert cand["path_regime"]["as_well"] == ["mass_line"]
+    assert "the mesh harmonics do not locate this mode" in (tmp_path / "r.html").read_text()
