@@ -41,10 +41,13 @@ AS_WELL = 0.9
 
 
 def _accelerance_ratios(f_hz: np.ndarray, natural_hz: float, damping_ratio: float) -> tuple:
-    """``(|A| m, |A| k / w^2)`` of the SDOF housing (:mod:`datagen.effects.transmission_path`) at ``f_hz``."""
-    r = np.asarray(f_hz, dtype=float) / natural_hz
-    den = np.abs(1.0 - r**2 + 2j * damping_ratio * r)
-    return r**2 / den, 1.0 / den
+    """``(|A| m, |A| k / w^2)`` of the SDOF housing at ``f_hz``: the effect's own accelerance
+    (:func:`datagen.effects.transmission_path.housing_accelerance`) at unit mass."""
+    from datagen.effects.transmission_path import housing_accelerance
+
+    f = np.asarray(f_hz, dtype=float)
+    mass = np.abs(housing_accelerance(f, 1.0, natural_hz, damping_ratio))
+    return mass, mass * (natural_hz / f) ** 2
 
 
 def corner_ratio(db: float = ASYMPTOTE_DB) -> float:

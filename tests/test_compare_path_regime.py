@@ -35,9 +35,11 @@ def test_corner_ratio_is_the_one_db_edge_of_the_undamped_mass_line():
                                                (3000.0, 0.05, "resonant"), (MESH_HZ / 2, 0.05, "resonant"),
                                                (5 * 12 * MESH_HZ, 0.05, "stiffness_line")])
 def test_regime_against_the_effects_own_accelerance(f_h, zeta, regime):
-    """The regime and its deviation from the asymptote, checked against datagen's housing_accelerance (the
-    transfer function the effect filters with, a separate implementation): every harmonic below fs/2 within 1 dB
-    of 1/m (mass line) or of w^2/k (stiffness line), else resonant; deviation to 1e-9 dB."""
+    """The regime and its deviation from the asymptote, read from datagen's housing_accelerance (the transfer
+    function the effect filters with, which path_regime also calls: this checks the classification and the
+    asymptote scaling at any mass, the accelerance itself is checked analytically in
+    test_effects_transmission_path.py): every harmonic below fs/2 within 1 dB of 1/m (mass line) or of w^2/k
+    (stiffness line), else resonant; deviation to 1e-9 dB."""
     r = path_regime(_mode(f_h, zeta), mesh_hz=MESH_HZ, n_harmonics=N_HARM, fs_hz=FS_HZ)
     f = MESH_HZ * np.arange(1, N_HARM + 1)
     f = f[f < FS_HZ / 2]
