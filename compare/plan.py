@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from compare.spectra import (ORDER_MASK_BINS, AngleRecords, angle_records, envelope_power, non_order, power_spectrum,
-                             refined_bin, smooth_floor)
+                             refined_bin, smooth_floor, usable_revolutions)
 from features.tsa import AngleTrack, default_samples_per_rev
 from gearpit.errors import require
 
@@ -126,8 +126,9 @@ def make_plan(x: np.ndarray, fs_hz: float, track: AngleTrack, pair, *, n_sideban
     fr = (track.angle_rad[-1] - track.angle_rad[0]) / (2 * np.pi) / (track.time_s[-1] - track.time_s[0])
     fm = fr * z1
     frw = fr * z1 / z2
-    n_revs = int(np.floor((track.angle_rad[-1] - track.angle_rad[0]) / (2 * np.pi) + 1e-9))
-    n_revs_w = int(np.floor((track.angle_rad[-1] - track.angle_rad[0]) * z1 / z2 / (2 * np.pi) + 1e-9))
+    revs = usable_revolutions(track, fs_hz)
+    n_revs = int(np.floor(revs + 1e-9))
+    n_revs_w = int(np.floor(revs * z1 / z2 + 1e-9))
     require(n_revs_w >= 2, "measurement length", f"{duration:.3g} s", "at least two wheel revolutions")
     top = 0.45 * fs_hz
     n_harm = int(min(max_harmonics, np.floor((top - n_sidebands * fr) / fm)))

@@ -21,7 +21,7 @@ from functools import lru_cache
 import numpy as np
 from scipy import fft as sp_fft
 
-from features.tsa import AngleTrack, TimeInterpolant
+from features.tsa import AngleTrack, TimeInterpolant, usable_angle_span
 from gearpit.errors import require
 
 #: half width (bins) of the neighbourhood whose low quantile is a line's floor
@@ -73,13 +73,26 @@ class AngleRecords:
     wheel: np.ndarray    # (R_w, N_w)
 
 
+#: the upsampling of :func:`angle_records`
+OVERSAMPLE = 2
+
+
+def usable_revolutions(track: AngleTrack, fs_hz: float) -> float:
+    """Pinion revolutions of ``track`` that :func:`angle_records` resamples: the record's first and last
+    ``TimeInterpolant.UPSAMPLING_HALF_TAPS`` samples are left out (the upsampling filter's edge, which rings in
+    proportion to the record's end values: a model's noise-free wheel TSA read it as an impulse, M8A 5e5)."""
+    a0, a1 = usable_angle_span(track, TimeInterpolant.UPSAMPLING_HALF_TAPS / fs_hz)
+    return (a1 - a0) / (2 * np.pi)
+
+
 def angle_records(x: np.ndarray, fs_hz: float, track: AngleTrack, plan) -> AngleRecords:
-    """Resample ``x`` (pinion angle ``track``) for the plan; refuses records shorter than the plan."""
+    """Resample ``x`` (pinion angle ``track``) for the plan, out of the record's edges (:func:`usable_revolutions`);
+    refuses records shorter than the plan."""
     ratio = plan.z_pinion / plan.z_wheel
-    rec = TimeInterpolant(x, fs_hz, oversample=2)          # one upsampling and spline for both shafts
-    rp = rec.resample(track, samples_per_rev=plan.samples_per_rev)
+    rec = TimeInterpolant(x, fs_hz, oversample=OVERSAMPLE)   # one upsampling and spline for both shafts
+    rp = rec.resample(track, samples_per_rev=plan.samples_per_rev, skip_edges=True)
     wt = AngleTrack(track.time_s, track.angle_rad * ratio)
-    rw = rec.resample(wt, samples_per_rev=plan.samples_per_rev_wheel)
+    rw = rec.resample(wt, samples_per_rev=plan.samples_per_rev_wheel, skip_edges=True)
     require(rp.shape[0] >= plan.n_revs and rw.shape[0] >= plan.n_revs_wheel, "record",
             f"{rp.shape[0]} pinion / {rw.shape[0]} wheel revolutions",
             f">= {plan.n_revs} / {plan.n_revs_wheel} (as many as the measurement)")

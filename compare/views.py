@@ -49,11 +49,11 @@ from functools import lru_cache
 import numpy as np
 
 from compare.plan import INDICATORS, STATS, Location, Plan
-from compare.spectra import (EXP_Q, FLOOR_QUANTILE, angle_records, db, envelope_power, non_order, non_order_wheel,
-                             power_spectrum, smooth_floor)
+from compare.spectra import (EXP_Q, FLOOR_QUANTILE, OVERSAMPLE, angle_records, db, envelope_power, non_order,
+                             non_order_wheel, power_spectrum, smooth_floor)
 from features.indicators import gear_condition_indicators
 from features.statistics import time_domain_statistics
-from features.tsa import AngleTrack, angular_resample, split_tsa
+from features.tsa import AngleTrack, TimeInterpolant, split_tsa
 
 
 @dataclass(frozen=True, eq=False)
@@ -95,7 +95,8 @@ def _pinion_part(xp: np.ndarray, plan: Plan):
 def pinion_lines(x: np.ndarray, fs_hz: float, track: AngleTrack, plan: Plan) -> SignalViews:
     """Quick look: levels and floors at the pinion-spectrum lines only (mesh harmonics, pinion sidebands and
     orders; NaN elsewhere), and the noise floor in ``curves`` - enough for a first gain estimate."""
-    xp = angular_resample(x, fs_hz, track, samples_per_rev=plan.samples_per_rev, oversample=2)[:plan.n_revs].ravel()
+    xp = TimeInterpolant(x, fs_hz, oversample=OVERSAMPLE).resample(
+        track, samples_per_rev=plan.samples_per_rev, skip_edges=True)[:plan.n_revs].ravel()    # as angle_records
     pp, fl_p, _, noise_floor = _pinion_part(xp, plan)
     levels = np.full(len(plan.locations), np.nan)
     floors = np.full(len(plan.locations), np.nan)

@@ -34,6 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.interpolate import PchipInterpolator
+from scipy.optimize import brentq
 from scipy.ndimage import map_coordinates, spline_filter1d
 from scipy.signal import firwin, resample_poly
 
@@ -195,7 +196,17 @@ class TimeInterpolant:
     record, the same function inside the record (they differ only in the end condition, mirror here and
     not-a-knot there; measured 4e-11 of the RMS more than 40 upsampled samples from either end), where the
     upsampling filter's own edge effect is larger anyway.
+
+    That edge effect: the filter reads :data:`UPSAMPLING_HALF_TAPS` input samples either side and takes the record
+    as zero outside it, so the first and last that many samples ring in proportion to the step from zero to the
+    record's end values (a record with a mean of 10 x its RMS: 0.44 x the RMS at the first samples; measured on a
+    line comb, ``tests/test_features_tsa.py``). :meth:`resample` with ``skip_edges=True`` starts and ends the
+    revolutions that far inside the record.
     """
+
+    #: input samples either side that the upsampling filter reads (its half length); the record's first and last
+    #: that many samples carry the filter's edge effect
+    UPSAMPLING_HALF_TAPS = 20
 
     def __init__(self, x: np.ndarray, fs_hz: float, *, oversample: int = 4):
         a = np.asarray(x, dtype=float)
@@ -206,9 +217,10 @@ class TimeInterpolant:
         self.duration_s = (a.size - 1) / fs_hz
         if oversample > 1:
             # Kaiser beta 8.6 (~80 dB stop band, ~1e-4 pass-band ripple), 20 input samples each side
-            taps = firwin(2 * 20 * oversample + 1, 1.0 / oversample, window=("kaiser", 8.6))
+            taps = firwin(2 * self.UPSAMPLING_HALF_TAPS * oversample + 1, 1.0 / oversample, window=("kaiser", 8.6))
             a = resample_poly(a, oversample, 1, window=taps)
         self.rate_hz = fs_hz * oversample
+        self.edge_s = (self.UPSAMPLING_HALF_TAPS if oversample > 1 else 0) / fs_hz
         self.coefficients = spline_filter1d(a, order=3, mode="mirror")
 
     def at(self, times_s: np.ndarray) -> np.ndarray:
@@ -217,21 +229,42 @@ class TimeInterpolant:
         return map_coordinates(self.coefficients, t.reshape(1, -1) * self.rate_hz, order=3, prefilter=False,
                                mode="mirror").reshape(t.shape)
 
-    def resample(self, track: AngleTrack, *, samples_per_rev: int) -> np.ndarray:
-        """The record at equal steps of ``track``'s angle, whole revolutions: ``(n_revolutions, samples_per_rev)``."""
+    def resample(self, track: AngleTrack, *, samples_per_rev: int, skip_edges: bool = False) -> np.ndarray:
+        """The record at equal steps of ``track``'s angle, whole revolutions: ``(n_revolutions, samples_per_rev)``.
+
+        ``skip_edges``: the revolutions start at the track's angle :attr:`edge_s` after its first time and end
+        before the angle that long before its last (:func:`usable_angle_span`), out of the upsampling filter's
+        edge effect."""
         require(isinstance(samples_per_rev, (int, np.integer)) and samples_per_rev >= 4, "samples_per_rev",
                 samples_per_rev, "an integer >= 4")
         require(track.time_s[0] >= -1e-12 and track.time_s[-1] <= self.duration_s + 1e-9, "track",
                 (float(track.time_s[0]), float(track.time_s[-1])), f"times within the record [0, {self.duration_s}] s")
-        # revolution r spans target angles 2 pi (r + j/N), j < N: the last one must be inside the track
-        n_rev = int(np.floor((track.angle_rad[-1] - track.angle_rad[0]) / TWO_PI + 1.0 / samples_per_rev + 1e-9))
+        a0, a1 = usable_angle_span(track, self.edge_s if skip_edges else 0.0)
+        # revolution r spans target angles 2 pi (r + j/N), j < N: the last one must be inside the span
+        n_rev = int(np.floor((a1 - a0) / TWO_PI + 1.0 / samples_per_rev + 1e-9))
         require(n_rev >= 1, "track", f"{n_rev} revolutions", ">= 1 whole revolution in the record")
-        target = track.angle_rad[0] + TWO_PI * np.arange(n_rev * samples_per_rev) / samples_per_rev
+        target = a0 + TWO_PI * np.arange(n_rev * samples_per_rev) / samples_per_rev
         if track.angle_rad.size == 2:      # a constant speed: PCHIP through two knots is the straight line
             times = np.interp(target, track.angle_rad, track.time_s)
         else:
             times = PchipInterpolator(track.angle_rad, track.time_s)(target)
         return self.at(times).reshape(n_rev, samples_per_rev)
+
+
+def usable_angle_span(track: AngleTrack, margin_s: float) -> tuple[float, float]:
+    """First and last angle of ``track`` at least ``margin_s`` inside its first and last time: the angles whose
+    times (the track's PCHIP, as :meth:`TimeInterpolant.resample` reads it) are exactly those."""
+    a_first, a_last = float(track.angle_rad[0]), float(track.angle_rad[-1])
+    if margin_s <= 0:
+        return a_first, a_last
+    t0, t1 = float(track.time_s[0]) + margin_s, float(track.time_s[-1]) - margin_s
+    require(t1 > t0, "track", f"{track.time_s[-1] - track.time_s[0]:.3g} s", f"> 2 x {margin_s:.3g} s (the edges)")
+    if track.angle_rad.size == 2:
+        a = np.interp([t0, t1], track.time_s, track.angle_rad)
+        return float(a[0]), float(a[1])
+    time_of = PchipInterpolator(track.angle_rad, track.time_s)
+    return tuple(float(brentq(lambda a, t=t: float(time_of(a)) - t, a_first, a_last, xtol=1e-13, rtol=1e-15))
+                 for t in (t0, t1))
 
 
 @dataclass(frozen=True)
