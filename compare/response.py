@@ -82,7 +82,9 @@ def fluctuation_response(model, pair, effect, *, speed_rpm: float, torque_nm: fl
     -------
     dict
         ``frequency_hz``; ``speed_pinion_amplitude_fraction`` and ``mesh_force_amplitude_fraction`` (amplitude at
-        the fluctuation frequency over the channel's mean); ``reference_amplitude_fraction`` (the effect's own).
+        the fluctuation frequency over the channel's mean); ``reference_amplitude_fraction`` (the effect's own);
+        ``mesh_force_min_fraction``: the mesh force's least value over its mean (below 0: the mesh pulls, the
+        teeth would have separated: :func:`contact_state`).
     """
     from datagen.simulate import simulate
 
@@ -102,7 +104,26 @@ def fluctuation_response(model, pair, effect, *, speed_rpm: float, torque_nm: fl
                       ("mesh_force_n", "mesh_force_amplitude_fraction")):
         x = np.asarray(sig.channels[name], dtype=float)[:n]
         out[key] = line_amplitude(x, f, sig.fs_hz) / abs(float(x.mean()))
+    force = np.asarray(sig.channels["mesh_force_n"], dtype=float)[:n]
+    out["mesh_force_min_fraction"] = float(force.min() / abs(force.mean()))
+    out["contact"] = contact_state(out)
     return out
+
+
+#: a least mesh force within this fraction of the mean of zero is contact lost, not tension (the backlash law's
+#: zero force, read through the solver's rounding)
+CONTACT_LOSS_TOL = 1e-3
+
+
+def contact_state(response: dict) -> str:
+    """"kept" (the mesh force stays positive over the fluctuation), "lost" (it touches zero: the teeth separate,
+    as a model with backlash lets them) or "tension" (it goes below zero: the teeth would have separated, and the
+    model, without backlash, let the mesh pull them together instead; the fitted amplitude is then outside what
+    a mesh that only pushes can make)."""
+    m = response.get("mesh_force_min_fraction")
+    if m is None or m > CONTACT_LOSS_TOL:
+        return "kept"
+    return "lost" if m >= -CONTACT_LOSS_TOL else "tension"
 
 
 #: shaft orders checked by :func:`shaft_order_of`
@@ -177,6 +198,14 @@ def response_text(response: dict, effect: str = "it") -> str:
         tail += (f"; {response['frequency_hz']:.4g} Hz is the {locked['shaft']}'s order {locked['order']} within "
                  f"the record's resolution: a once-per-revolution error of that shaft (eccentricity, pitch error) "
                  f"makes the same sidebands, and only a speed or torque channel tells them apart")
+    state = contact_state(response)
+    if state == "tension":
+        tail += (f"; the mesh force then falls to {100 * response['mesh_force_min_fraction']:.3g} % of its mean: the "
+                 "teeth would separate, and this model (no backlash) lets the mesh pull instead, so a swing this "
+                 "large is outside what the model can make; add backlash, or read the fit as 'stronger sidebands "
+                 "than a fluctuation that keeps the teeth in contact makes', not as the rig's swing")
+    elif state == "lost":
+        tail += "; the mesh force touches zero: the teeth separate in the model over part of each cycle"
     return (f"in the model the pinion speed swings +/-{100 * response['speed_pinion_amplitude_fraction']:.3g} % "
             f"and the mesh force +/-{100 * response['mesh_force_amplitude_fraction']:.3g} % at "
             f"{response['frequency_hz']:.4g} Hz (the fitted amplitude_fraction "
@@ -220,5 +249,5 @@ def attach_responses(candidates, model, pair, *, speed_rpm: float, torque_nm: fl
     return n
 
 
-__all__ = ["acts_on_operating_point", "attach_responses", "fluctuation_response", "line_amplitude", "mark_shaft_locks",
+__all__ = ["acts_on_operating_point", "attach_responses", "contact_state", "fluctuation_response", "line_amplitude", "mark_shaft_locks",
            "modulations", "response_text", "revolution_shafts", "shaft_order_of"]

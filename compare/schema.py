@@ -171,6 +171,16 @@ SCHEMA = {
                                                                 "speed_pinion_amplitude_fraction": {"type": "number"},
                                                                 "mesh_force_amplitude_fraction": {"type": "number"},
                                                                 "reference_amplitude_fraction": {"type": "number"},
+                                                                "mesh_force_min_fraction": {
+                                                                    "type": "number",
+                                                                    "description": "the mesh force's least value "
+                                                                    "over its mean; below 0 the mesh pulls (the "
+                                                                    "teeth would separate: outside the model "
+                                                                    "without backlash)"},
+                                                                "contact": {
+                                                                    "type": "string",
+                                                                    "enum": ["kept", "lost", "tension"],
+                                                                    "description": "compare.response.contact_state"},
                                                                 "shaft_order": {
                                                                     "type": ["object", "null"],
                                                                     "description": "the shaft order the "

@@ -166,6 +166,13 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
     if att is not None and att.claimed and att.rivals:
         messages.append(f"claimed {att.claimed[0].effect}, but {', '.join(att.rivals)} lowers the error almost as "
                         "much: these views cannot tell them apart")
+    if att is not None and att.claimed and (att.claimed[0].response or {}).get("contact") == "tension":
+        top = att.claimed[0]
+        messages.append(f"claimed {top.effect}, but its fitted swing drives the model's mesh force below zero "
+                        f"({100 * top.response['mesh_force_min_fraction']:.3g} % of its mean): the teeth would "
+                        "separate, which the model without backlash cannot show; the claim says the sidebands are "
+                        "stronger than a fluctuation keeping the teeth in contact makes, not how large the rig's "
+                        "swing is")
     if att is not None and att.claimed and get(att.claimed[0].effect).mesh_harmonics_only:
         messages.append(mesh_shape_caveat(att.claimed[0].effect))
     row = make_row(comparison, att, run=len(rows) + 1, measurement_path=str(measurement_path))

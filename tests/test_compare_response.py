@@ -9,7 +9,8 @@ import pytest
 
 from compare.candidates import CandidateResult
 from compare.model import ComparisonModel
-from compare.response import acts_on_operating_point, attach_responses, fluctuation_response, line_amplitude
+from compare.response import (acts_on_operating_point, attach_responses, contact_state, fluctuation_response,
+                              line_amplitude, response_text)
 from datagen.effects import EffectSpec
 from datagen.geometry import preset
 from gearpit.errors import InputError
@@ -126,11 +127,12 @@ def test_a_candidate_with_a_response_fits_the_documented_schema(model):
     doc = c.to_dict()
     jsonschema.validate(doc, item)
     assert set(doc["response"]) == {"frequency_hz", "reference_amplitude_fraction", "speed_pinion_amplitude_fraction",
-                                    "mesh_force_amplitude_fraction"}
-    bad = copy.deepcopy(doc)
-    bad["response"]["speed_pinion_amplitude_fraction"] = "1 %"
-    with pytest.raises(jsonschema.ValidationError):
-        jsonschema.validate(bad, item)
+                                    "mesh_force_amplitude_fraction", "mesh_force_min_fraction", "contact"}
+    for key, wrong in (("speed_pinion_amplitude_fraction", "1 %"), ("contact", "separated")):
+        bad = copy.deepcopy(doc)
+        bad["response"][key] = wrong
+        with pytest.raises(jsonschema.ValidationError):
+            jsonschema.validate(bad, item)
 
 
 def test_the_foreign_load_swing_reads_as_amplitude_and_gearpits_fluctuations_as_frequency_modulation(model):
@@ -177,3 +179,23 @@ def test_a_fluctuation_on_a_shaft_order_is_said_to_twin_a_once_per_revolution_er
     locked = response_text({**base, "shaft_order": {"shaft": "pinion", "order": 1}}, "torque_fluctuation")
     assert locked.startswith(plain) and "pinion's order 1" in locked and "eccentricity" in locked
     assert "order" not in plain.split("Hz (")[0]
+
+
+def test_a_swing_past_the_mean_force_is_flagged_as_tension(model):
+    """A mesh that only pushes cannot swing by more than its mean force; the model without backlash lets it pull.
+    Static balance: the same absolute swing of the pinion torque is a 16x larger fraction of the mesh force at
+    5 N m than at 80 N m. A 20 % speed reference at 40 Hz swings the mesh force by 13.6 % at 80 N m (contact
+    kept: least force above half the mean) and by 217 % at 5 N m, where the least force must lie below
+    1 - 2.17 < 0 (minus the mesh ripple's share): the response says "tension", the text says the fit is outside
+    what the model can make, and the 80 N m one says nothing of contact."""
+    e = effect("speed_fluctuation", frequency_hz=40.0, amplitude_fraction=0.2)
+    loaded = fluctuation_response(model, preset("spur-gds"), e, speed_rpm=SPEED_RPM, torque_nm=80.0)
+    light = fluctuation_response(model, preset("spur-gds"), e, speed_rpm=SPEED_RPM, torque_nm=5.0)
+    assert light["mesh_force_amplitude_fraction"] > 1.0 > 0.5 > loaded["mesh_force_amplitude_fraction"]
+    assert loaded["contact"] == "kept" and loaded["mesh_force_min_fraction"] > 0.5
+    assert light["contact"] == "tension"
+    assert light["mesh_force_min_fraction"] < 1.0 - light["mesh_force_amplitude_fraction"] + 0.2
+    assert "outside what the model can make" in response_text(light, "speed_fluctuation")
+    assert "contact" not in response_text(loaded, "speed_fluctuation")
+    assert contact_state({"mesh_force_min_fraction": 0.0}) == "lost"
+    assert "separate in the model" in response_text({**loaded, "mesh_force_min_fraction": 0.0}, "x")
