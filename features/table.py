@@ -229,8 +229,11 @@ def signal_features(x: np.ndarray, config: FeatureConfig, *, fr_pinion_hz: float
 
     out: dict[str, float] = {f"raw_{k}": float(v) for k, v in statistics.time_domain_statistics(a).items()}
 
+    # the mean off first: the resampling's upsampling filter rings at the record's ends in proportion to its end
+    # values, and an offset (an accelerometer's bias) would put that ring into the averages' first samples
+    a0 = a - a.mean()
     for shaft, track, fr, z in (("pinion", track_p, fr_p, config.z_pinion), ("wheel", track_w, fr_w, config.z_wheel)):
-        avg = tsa.synchronous_average(a, fs, track, samples_per_rev=tsa.default_samples_per_rev(fs, fr))
+        avg = tsa.synchronous_average(a0, fs, track, samples_per_rev=tsa.default_samples_per_rev(fs, fr))
         ci = indicators.gear_condition_indicators(avg.average, int(z), n_shaft_orders=config.tsa_shaft_orders,
                                                   n_sideband_orders=config.tsa_sideband_orders)
         out.update({f"tsa_{shaft}_{k}": v for k, v in ci.items()})
