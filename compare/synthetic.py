@@ -98,6 +98,9 @@ HIDDEN_EXAMPLES = {
     # all three checks passed on five of six realisations (fitted 22.4-32.5 um, ratios 0.38-0.48 and one 0.502)
     "backlash": HiddenExample({"name": "backlash", "backlash_m": 30e-6}, torque_nm=2.0,
                               check=("backlash_m", "ratio", 2.0), known=({"name": "profile_error", "grade": 9.0},)),
+    # a pit over a fifth of one pinion tooth's flank (the default dataset's "severe" class is 15-25 %): the fault
+    # the toolkit is about, as the comparison's candidate (datagen.effects.tooth_pit)
+    "tooth_pit": HiddenExample({"name": "tooth_pit", "severity": 0.2}, check=("severity", "abs", 0.05)),
     "speed_fluctuation": HiddenExample({"name": "speed_fluctuation", "amplitude_fraction": 0.01, "frequency_hz": 23.0},
                                        check=("frequency_hz", "ratio", 1.05)),
     "torque_fluctuation": HiddenExample({"name": "torque_fluctuation", "amplitude_fraction": 0.2,
