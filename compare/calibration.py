@@ -346,6 +346,23 @@ def calibrate(ref, model, *, extra_effects: tuple = (), settings: CalibrationSet
                        residual_db=best.residual_db, view_error_db=best.view_error_db)
 
 
+def error_at(ref, model, values: dict, *, settings: CalibrationSettings | None = None, solver: dict | None = None):
+    """The errors of ``model`` at the nuisance ``values`` as a :func:`calibrate` point measures them (same
+    views, noise seed, held-out time-stepped effects): a :class:`compare.calibration_points.Point` with
+    ``total_db`` (raw), ``error_db`` (over the views) and ``view_error_db``."""
+    settings = settings or CalibrationSettings()
+    held_out = tuple(e.name for e in model.effects if e.is_nonlinear or e.is_nonstationary)
+    if held_out:
+        model = replace(model, effects=tuple(e for e in model.effects if e.name not in held_out))
+    names = tuple(settings.parameters)
+    s0 = drivetrain_values(model, names)
+    s0.update({k: float(v) for k, v in values.items() if k in s0})
+    params = [nuisance_parameter(n, s0[n]) for n in names]
+    pt = Point(np.array([float(p.to_u(min(max(s0[p.name], p.lo), p.hi))) for p in params]))
+    evaluate_points(ref, model, params, [pt], (), settings.seed, solver, [0], settings.views, exact=pt, start=s0)
+    return pt
+
+
 def calibrated_compare(measurement, model, *, reference=None, seed: int = 0, calibrate_nuisances: bool | None = None,
                        settings: CalibrationSettings | None = None):
     """Calibrate the model's nuisances (when ``calibrate_nuisances``; None: the model's ``[calibration]
