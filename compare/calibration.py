@@ -241,6 +241,22 @@ def drivetrain_values(model, names=DEFAULT_PARAMETERS) -> dict:
     return {n: float(getattr(dt, n)) for n in names}
 
 
+def _setup(model, extra_effects: tuple, settings: CalibrationSettings, start: dict | None, time_stepped: bool):
+    """What :func:`calibrate` and :func:`error_at` start from: the model and extra effects without the held-out
+    time-stepped ones (module docstring), their names, the start values (the model's drive train, overridden by
+    ``start``) and the nuisances' search parameters."""
+    held_out = () if time_stepped else tuple(e.name for e in tuple(model.effects) + tuple(extra_effects)
+                                             if e.is_nonlinear or e.is_nonstationary)
+    if held_out:      # module docstring: time-stepped effects are held out
+        model = replace(model, effects=tuple(e for e in model.effects if e.name not in held_out))
+        extra_effects = tuple(e for e in extra_effects if e.name not in held_out)
+    names = tuple(settings.parameters)
+    s0 = drivetrain_values(model, names)
+    if start is not None:
+        s0.update({k: float(v) for k, v in start.items() if k in s0})
+    return model, extra_effects, held_out, s0, [nuisance_parameter(n, s0[n]) for n in names]
+
+
 def calibrate(ref, model, *, extra_effects: tuple = (), settings: CalibrationSettings | None = None,
               start: dict | None = None, solver: dict | None = None, free_effect: bool = False,
               time_stepped: bool = False) -> Calibration:
@@ -272,16 +288,8 @@ def calibrate(ref, model, *, extra_effects: tuple = (), settings: CalibrationSet
     """
     settings = settings or CalibrationSettings()
     t0 = time.perf_counter()
-    held_out = () if time_stepped else tuple(e.name for e in tuple(model.effects) + tuple(extra_effects)
-                                             if e.is_nonlinear or e.is_nonstationary)
-    if held_out:      # module docstring: time-stepped effects are held out
-        model = replace(model, effects=tuple(e for e in model.effects if e.name not in held_out))
-        extra_effects = tuple(e for e in extra_effects if e.name not in held_out)
+    model, extra_effects, held_out, s0, params = _setup(model, extra_effects, settings, start, time_stepped)
     names = tuple(settings.parameters)
-    s0 = drivetrain_values(model, names)
-    if start is not None:
-        s0.update({k: float(v) for k, v in start.items() if k in s0})
-    params = [nuisance_parameter(n, s0[n]) for n in names]
     free = None
     if free_effect and extra_effects:
         from compare.fitspace import fit_space
@@ -351,13 +359,7 @@ def error_at(ref, model, values: dict, *, settings: CalibrationSettings | None =
     views, noise seed, held-out time-stepped effects): a :class:`compare.calibration_points.Point` with
     ``total_db`` (raw), ``error_db`` (over the views) and ``view_error_db``."""
     settings = settings or CalibrationSettings()
-    held_out = tuple(e.name for e in model.effects if e.is_nonlinear or e.is_nonstationary)
-    if held_out:
-        model = replace(model, effects=tuple(e for e in model.effects if e.name not in held_out))
-    names = tuple(settings.parameters)
-    s0 = drivetrain_values(model, names)
-    s0.update({k: float(v) for k, v in values.items() if k in s0})
-    params = [nuisance_parameter(n, s0[n]) for n in names]
+    model, _, _, s0, params = _setup(model, (), settings, values, False)
     pt = Point(np.array([float(p.to_u(min(max(s0[p.name], p.lo), p.hi))) for p in params]))
     evaluate_points(ref, model, params, [pt], (), settings.seed, solver, [0], settings.views, exact=pt, start=s0)
     return pt

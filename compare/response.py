@@ -100,11 +100,9 @@ def fluctuation_response(model, pair, effect, *, speed_rpm: float, torque_nm: fl
     (sig,) = simulate([case], channels=["speed_pinion_rpm", "mesh_force_n"])
     out = {"frequency_hz": f, "reference_amplitude_fraction": float(effect.amplitude_fraction)}
     n = int(round(duration * sig.fs_hz))                     # whole cycles
-    for name, key in (("speed_pinion_rpm", "speed_pinion_amplitude_fraction"),
-                      ("mesh_force_n", "mesh_force_amplitude_fraction")):
-        x = np.asarray(sig.channels[name], dtype=float)[:n]
-        out[key] = line_amplitude(x, f, sig.fs_hz) / abs(float(x.mean()))
-    force = np.asarray(sig.channels["mesh_force_n"], dtype=float)[:n]
+    speed, force = (np.asarray(sig.channels[c], dtype=float)[:n] for c in ("speed_pinion_rpm", "mesh_force_n"))
+    out["speed_pinion_amplitude_fraction"] = line_amplitude(speed, f, sig.fs_hz) / abs(float(speed.mean()))
+    out["mesh_force_amplitude_fraction"] = line_amplitude(force, f, sig.fs_hz) / abs(float(force.mean()))
     out["mesh_force_min_fraction"] = float(force.min() / abs(force.mean()))
     out["contact"] = contact_state(out)
     return out
@@ -249,5 +247,5 @@ def attach_responses(candidates, model, pair, *, speed_rpm: float, torque_nm: fl
     return n
 
 
-__all__ = ["acts_on_operating_point", "attach_responses", "contact_state", "fluctuation_response", "line_amplitude", "mark_shaft_locks",
-           "modulations", "response_text", "revolution_shafts", "shaft_order_of"]
+__all__ = ["acts_on_operating_point", "attach_responses", "contact_state", "fluctuation_response", "line_amplitude",
+           "mark_shaft_locks", "modulations", "response_text", "revolution_shafts", "shaft_order_of"]

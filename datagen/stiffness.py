@@ -270,6 +270,11 @@ def cell_share(x, y) -> np.ndarray:
     return f
 
 
+def default_n_slices(pair) -> int:
+    """Slices across the face width of a record without pits: 1 for a spur pair, 100 for a helical one."""
+    return 100 if pair.is_helical else 1
+
+
 def mesh_stiffness(pair, *, pits=None, positions_per_cycle: int = 64, n_slices: int | None = None,
                    pit_model: str = "no_contact", edges: str = "box") -> MeshStiffness:
     """Mesh stiffness of ``pair`` over one revolution of the pitted gear(s).
@@ -335,7 +340,7 @@ def _mesh_stiffness(pair, pits, positions_per_cycle, n_slices, pit_model, edges)
     maps = normalise_pits(pair, pits)
     if n_slices is None:
         cols = [pm.grid.n_face for pm in maps if pm.pitted_teeth]
-        n_slices = max(cols) if cols else (100 if pair.is_helical else 1)
+        n_slices = max(cols) if cols else default_n_slices(pair)
     require(isinstance(n_slices, int) and 1 <= n_slices <= 20000, "n_slices", n_slices, "an integer in [1, 20000]")
     z1, z2 = pair.pinion.teeth, pair.wheel.teeth
     gears = {pm.gear for pm in maps if pm.pitted_teeth}

@@ -46,7 +46,7 @@ def with_pit(stiffness, gear: str, severity: float, depth_m: float):
     """``stiffness`` (a :class:`datagen.stiffness.MeshStiffness`) rebuilt with an elliptical pit of ``severity``
     on tooth 0 of ``gear`` added to its pits, with its own options."""
     from datagen.pits import make_pit_map
-    from datagen.stiffness import mesh_stiffness
+    from datagen.stiffness import default_n_slices, mesh_stiffness
 
     pair = stiffness.pair
     maps = {pm.gear: pm for pm in stiffness.pits}
@@ -60,9 +60,8 @@ def with_pit(stiffness, gear: str, severity: float, depth_m: float):
     # slices as a [pits] table gets them: a record without pits at the default slicing (1 for a spur pair, 100
     # for a helical one) is resliced at the pit maps' face columns (a spur pit on one slice would take the whole
     # face out of contact); a record that has pits, or other slices, keeps its own
-    default = (100 if pair.is_helical else 1)
-    n_slices = None if not any(pm.pitted_teeth for pm in stiffness.pits) and stiffness.n_slices == default \
-        else stiffness.n_slices
+    unpitted = not any(pm.pitted_teeth for pm in stiffness.pits)
+    n_slices = None if unpitted and stiffness.n_slices == default_n_slices(pair) else stiffness.n_slices
     return mesh_stiffness(pair, pits=tuple(maps.values()), positions_per_cycle=stiffness.positions_per_cycle,
                           n_slices=n_slices, pit_model=stiffness.pit_model, edges=stiffness.edges)
 
