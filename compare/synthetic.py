@@ -101,6 +101,9 @@ HIDDEN_EXAMPLES = {
     # a pit over a fifth of one pinion tooth's flank (the default dataset's "severe" class is 15-25 %): the fault
     # the toolkit is about, as the comparison's candidate (datagen.effects.tooth_pit)
     "tooth_pit": HiddenExample({"name": "tooth_pit", "severity": 0.2}, check=("severity", "abs", 0.05)),
+    # a pinion tooth broken over 30 % of its face width at the root (datagen.effects.tooth_breakage)
+    "tooth_breakage": HiddenExample({"name": "tooth_breakage", "width_fraction": 0.3},
+                                    check=("width_fraction", "abs", 0.1)),
     "speed_fluctuation": HiddenExample({"name": "speed_fluctuation", "amplitude_fraction": 0.01, "frequency_hz": 23.0},
                                        check=("frequency_hz", "ratio", 1.05)),
     "torque_fluctuation": HiddenExample({"name": "torque_fluctuation", "amplitude_fraction": 0.2,

@@ -46,16 +46,29 @@ def with_pit(stiffness, gear: str, severity: float, depth_m: float):
     """``stiffness`` (a :class:`datagen.stiffness.MeshStiffness`) rebuilt with an elliptical pit of ``severity``
     on tooth 0 of ``gear`` added to its pits, with its own options."""
     from datagen.pits import make_pit_map
+
+    def ellipse(grid):
+        new = make_pit_map(grid, shape="ellipse", severity=float(severity), teeth=[0], gear=gear, depth_m=depth_m)
+        return new.depth_m.get(0)
+
+    return with_tooth_fault(stiffness, gear, ellipse)
+
+
+def with_tooth_fault(stiffness, gear: str, tooth0_depth_m):
+    """``stiffness`` rebuilt with a fault on tooth 0 of ``gear`` added to its pits, with its own options:
+    ``tooth0_depth_m(grid)`` gives the fault's depth map (m) on that gear's flank grid (None: no pixel). The
+    grid is the case's when it has a pit map on that gear, else :data:`GRID`; a fault on a tooth that already
+    has pits merges by the deeper of the two depths."""
     from datagen.stiffness import default_n_slices, mesh_stiffness
 
     pair = stiffness.pair
     maps = {pm.gear: pm for pm in stiffness.pits}
     old = maps.get(gear)
     grid = old.grid if old is not None else pair.flank_grid(gear, *GRID)
-    new = make_pit_map(grid, shape="ellipse", severity=float(severity), teeth=[0], gear=gear, depth_m=depth_m)
+    new = tooth0_depth_m(grid)
     depth = dict(old.depth_m) if old is not None else {}
-    if 0 in new.depth_m:
-        depth[0] = np.maximum(depth[0], new.depth_m[0]) if 0 in depth else new.depth_m[0]
+    if new is not None:
+        depth[0] = np.maximum(depth[0], new) if 0 in depth else np.asarray(new, dtype=np.float64)
     maps[gear] = PitMap(grid=grid, depth_m=depth, gear=gear)
     # slices as a [pits] table gets them: a record without pits at the default slicing (1 for a spur pair, 100
     # for a helical one) is resliced at the pit maps' face columns (a spur pit on one slice would take the whole
@@ -99,4 +112,4 @@ class ToothPit(Effect):
         return with_pit(stiffness, self.gear, self.severity, self.depth_m)
 
 
-__all__ = ["GRID", "ToothPit", "with_pit"]
+__all__ = ["GRID", "ToothPit", "with_pit", "with_tooth_fault"]
