@@ -1,6 +1,6 @@
 """The default loop (compare, attribute, "auto" calibration) on rigs unlike the test rig of the suite.
 
-    python experiments/unseen_rigs_check.py            # every case, ~12 min on 2 cores
+    python experiments/unseen_rigs_check.py            # every case (13), ~8-14 min on 2 cores
     python experiments/unseen_rigs_check.py --only spur_healthy_3000rpm helical_pitch_error
 
 The tests make their "measurements" at one operating point (spur-gds, 1000 rpm, 50 N m, 2 s at 20 kHz, 30 dB
@@ -46,6 +46,15 @@ CASES = {
     "helical_eccentricity_3000rpm_51k2": (dict(pair="helical-dct", speed_rpm=3000.0, torque_nm=100.0,
                                                fs_hz=51200.0, duration_s=1.0, effects=(
         {"name": "eccentricity_pinion", "amplitude_m": 30e-6},)), "eccentricity_pinion"),
+    # the local tooth faults (stop 57): a pit on a wheel tooth of the helical pair, a pinion tooth broken over a
+    # quarter of its width on the spur pair at a low speed and load; each names the other as a rival or not
+    "helical_wheel_pit_1200rpm": (dict(pair="helical-dct", speed_rpm=1200.0, torque_nm=40.0, fs_hz=25600.0,
+                                       duration_s=2.0, snr_db=25.0,
+                                       effects=({"name": "tooth_pit", "severity": 0.3, "gear": "wheel"},)),
+                                  "tooth_pit"),
+    "spur_broken_tooth_600rpm": (dict(speed_rpm=600.0, torque_nm=20.0, fs_hz=10000.0, duration_s=3.0,
+                                      effects=({"name": "tooth_breakage", "width_fraction": 0.25},)),
+                                 "tooth_breakage"),
 }
 
 
