@@ -8,30 +8,20 @@ a 25-tooth pinion (ratio exactly 4), 1500 rpm, 20 N m, 0.48 s at 10 kHz = 12 pin
 """
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 import pytest
+# the same rig as the pit's tests (spur-gds with 25 pinion teeth, 1500 rpm, 20 N m, 0.48 s at 10 kHz)
+from test_effects_tooth_pit import CH, FS, PAIR, case
 
 from datagen.effects import EffectSpec
 from datagen.effects.tooth_breakage import BROKEN_DEPTH_M, ToothBreakage, broken_band
 from datagen.effects.tooth_pit import GRID
 from datagen.flank import PitMap
-from datagen.geometry import preset, spur_pair_example
-from datagen.simulate import Case, OperatingPoint, prepare, simulate
+from datagen.geometry import preset
+from datagen.simulate import prepare, simulate
 from datagen.stiffness import mesh_stiffness
 from features.spectra import line_amplitudes
 from gearpit.errors import InputError
-
-_SPUR = spur_pair_example()
-PAIR = replace(_SPUR, pinion=replace(_SPUR.pinion, teeth=25), name="spur-gds-z25")
-OP = OperatingPoint(speed_rpm=1500.0, torque_nm=20.0)
-FS, DUR = 10000.0, 0.48
-CH = "acc_pinion_loa_m_s2"
-
-
-def case(pair=PAIR, **kw):
-    return Case(pair=pair, operating=OP, duration_s=DUR, fs_hz=FS, **kw)
 
 
 def breakage(**kw):
