@@ -204,7 +204,7 @@ def compare_and_attribute(measurement, model, *, reference=None, calibrate=None,
     from compare.candidates import AttributionSettings
     from compare.calibration import calibrated_compare
     from compare.comparison import prepare_reference
-    from compare.joint_refit import refit_claim_jointly
+    from compare.joint_refit import reexamine_leader, refit_claim_jointly
     from compare.sideband_fit import refit_on_sidebands
 
     mode = resolve_mode(model, calibrate)
@@ -220,6 +220,7 @@ def compare_and_attribute(measurement, model, *, reference=None, calibrate=None,
             settle_rivals(ref, c, a, settings, seed=seed)
             refit_on_sidebands(ref, c, a, seed=seed)      # a claimed fluctuation whose sidebands disagree only
             refit_claim_jointly(ref, c, a, settings, parallel=parallel)     # a calibrated pass's claim only
+            reexamine_leader(ref, c, a, settings, parallel=parallel)        # a calibrated pass claiming nothing
         return a
 
     c = calibrated_compare(measurement, model, reference=ref, seed=seed, calibrate_nuisances=mode is True)

@@ -116,10 +116,7 @@ def refit_claim_jointly(ref, comparison, attribution, settings, *, parallel: boo
     dict or None
         The candidate's ``joint_refit`` record (also set on it), or None when the step does not apply.
     """
-    from compare.fitspace import fit_space
-    from compare.fitting import record_period_s
     from compare.refit import MIN_GAIN
-    from datagen.effects import get
 
     cal = comparison.calibration
     claimed = attribution.claimed
@@ -127,14 +124,105 @@ def refit_claim_jointly(ref, comparison, attribution, settings, *, parallel: boo
     if cal is None or not claimed or n_samples <= 0:
         return None
     cand = claimed[0]
-    if cand.status != "fitted" or cand.interval or fit_space(get(cand.effect)).transient:
+    if cand.joint_refit is not None or not _eligible(ref, comparison, cand):
         return None
+    scored, n_sims, start_nu, t0 = _joint_options(ref, comparison, cand, settings, n_samples, parallel)
+    current_db = scored[0][0]
+    best = min(scored, key=lambda s: s[0])
+    kept = best[1] != "current" and best[0] <= (1.0 - MIN_GAIN) * current_db
+    record = _record(n_samples, settings, kept, best, current_db, cand, start_nu, n_sims, t0)
+    if kept:
+        _adopt(cand, ref, best, list(comparison.disagreements))
+        _check_regime(cand, ref, comparison, settings)
+    cand.joint_refit = record
+    return record
+
+
+def reexamine_leader(ref, comparison, attribution, settings, *, parallel: bool = True) -> dict | None:
+    """When a calibrated pass claims nothing: refit its leading candidate and the baseline each over the whole
+    nuisance box, measure the leader against the better baseline, and apply the claim rule again (in place).
+
+    Why: the calibration fits the drive train without the missing effect, so it bends the nuisances to imitate
+    part of it, and the attribution's local refit (:func:`compare.nuisance_refit.refine_nuisances`) cannot
+    leave that basin; the effect that is there may then take less than the noise error off (the claim rule's
+    ``min_explained_to_noise``) and nothing is claimed, while at the rig's own nuisances it explains nearly
+    everything. Measured on the helical rig of :data:`compare.synthetic.OTHER_RIGS` with a hidden 3 kHz / 5 %
+    housing mode (noise seed 11): the calibration landed at bearing damping 0.18 (the rig's 0.03), the housing
+    mode ranked first at 36.9 % (2.00 -> 1.26 dB, 0.74 dB off against a noise error of 0.88 dB) and was not
+    claimed; whether the local refit got out depended on the search's damping start (stop 54 it did, by luck:
+    1.38 dB, then claimed and jointly refitted to 0.53 dB).
+
+    Fair terms: the baseline gets the same global search as the leader - as many Sobol points over the
+    nuisances (the leader's are over its own parameters too), the :data:`STARTS` best and the calibrated values
+    refined by the same scans, the best by the total error of a whole comparison - and it is also compared at the nuisances the leader's refit ended
+    on (:func:`compare.nuisance_refit.refine_nuisances` says why). The leader's reduction is measured against the
+    lowest of these baselines and the calibrated one, and the claim rule (:func:`compare.candidates.choose_claim`)
+    runs again over all candidates (the others keep their reductions against the calibrated baseline). What more
+    fitting of the drive train gives is thus not credited to the effect; a control with nothing hidden gains on
+    both sides alike (``tests/test_compare_attribution.py``). Only the first-ranked candidate, only on the
+    conditions of :func:`refit_claim_jointly` (periodic, within a pinion revolution); its record is the
+    candidate's ``joint_refit`` entry with ``reexamined`` true and the baselines compared.
+
+    Returns the record, or None when the step does not apply.
+    """
+    from compare.candidates import choose_claim, rivals_of, unexplained_of
+
+    cal = comparison.calibration
+    n_samples = int(settings.joint_samples)
+    if cal is None or attribution.claimed or n_samples <= 0 or not attribution.candidates:
+        return None
+    cand = attribution.candidates[0]
+    if cand.reduction <= 0 or cand.joint_refit is not None or not _eligible(ref, comparison, cand):
+        return None
+    scored, n_sims, start_nu, t0 = _joint_options(ref, comparison, cand, settings, n_samples, parallel)
+    current_db = scored[0][0]
+    best = min(scored, key=lambda s: s[0])
+    kept = best[1] != "current" and best[0] < current_db
+    base_db, base_views, base_raw, base_kind, n_null = _null_baseline(ref, comparison, best[2] if kept else start_nu,
+                                                                     settings, n_samples, parallel)
+    n_sims += n_null
+    record = _record(n_samples, settings, kept, best, current_db, cand, start_nu, n_sims, t0)
+    record.update({"reexamined": True, "baseline_before_db": float(cand.baseline_error_db),
+                   "baseline_refitted_db": float(base_db), "baseline_chosen": base_kind,
+                   "reduction_before": float(cand.reduction)})
+    if kept:
+        _adopt(cand, ref, best, list(comparison.disagreements))
+    if base_db < cand.baseline_error_db:
+        cand.baseline_error_db = float(base_db)
+        cand.baseline_view_error_db = dict(base_views)
+        cand.raw_baseline_error_db = float(base_raw)
+    record["reduction_after"] = float(cand.reduction)
+    record["elapsed_s"] = time.perf_counter() - t0
+    cand.joint_refit = record
+    attribution.candidates.sort(key=lambda c: -c.reduction)
+    claimed = choose_claim(attribution.candidates, settings)
+    if claimed is not None:
+        _check_regime(claimed, ref, comparison, settings)
+    attribution.rivals = rivals_of(claimed, attribution.candidates, settings)
+    attribution.unexplained = unexplained_of(attribution.candidates, comparison.disagreements, settings)
+    record["claimed"] = claimed is not None and claimed is cand
+    return record
+
+
+def _eligible(ref, comparison, cand) -> bool:
+    """Whether ``cand`` can be refitted jointly (:func:`refit_claim_jointly`'s conditions)."""
+    from compare.fitspace import fit_space
+    from compare.fitting import record_period_s
+    from datagen.effects import get
+
+    if cand.status != "fitted" or cand.interval or fit_space(get(cand.effect)).transient:
+        return False
     if any(e.is_nonlinear or e.is_nonstationary for e in comparison.model.effects):
-        return None         # the model itself is time-stepped: no periodic path to search on
-    effect = cand.build_effect()
-    if record_period_s(ref, comparison.model, effect) > 1.001 * 60.0 / ref.speed.speed_rpm:
-        return None         # longer than a pinion revolution: too costly per sample (module docstring)
+        return False        # the model itself is time-stepped: no periodic path to search on
+    # longer than a pinion revolution: too costly per sample (module docstring)
+    return record_period_s(ref, comparison.model, cand.build_effect()) <= 1.001 * 60.0 / ref.speed.speed_rpm
+
+
+def _joint_options(ref, comparison, cand, settings, n_samples: int, parallel: bool):
+    """Steps 1-4 of the module docstring: the scored options ``(excess total dB, kind, nuisances, params,
+    sigma, comparison)`` ("current" first), the simulations run, the start nuisances and the start time."""
     t0 = time.perf_counter()
+    cal = comparison.calibration
     m = ref.measurement
     model = comparison.model
     start_nu = dict(cand.nuisance or cal.values)
@@ -151,22 +239,70 @@ def refit_claim_jointly(ref, comparison, attribution, settings, *, parallel: boo
     for kind, nu, params, sig in options:
         c = _compare_with(m, ref, model, cand.effect, params, nu, settings.seed)
         scored.append((c.evaluation.residuals.excess_total_db, kind, nu, params, sig, c))
-    current_db = scored[0][0]
-    best = min(scored, key=lambda s: s[0])
-    kept = best[1] != "current" and best[0] <= (1.0 - MIN_GAIN) * current_db
-    record = {"samples": n_samples, "starts": STARTS, "seed": int(settings.seed), "kept": bool(kept),
-              "chosen": best[1] if kept else "current", "error_before_db": float(current_db),
-              "error_after_db": float(best[0] if kept else current_db),
-              "params_before": _plain(cand.params), "nuisance_before": _plain(start_nu),
-              "n_simulations": int(n_sims), "elapsed_s": time.perf_counter() - t0}
-    if kept:
-        _adopt(cand, ref, best, list(comparison.disagreements))
-        if cand.path_regime:         # the refit moved the housing mode: is it located there?
-            from compare.path_regime import check_asymptotes
+    return scored, n_sims, start_nu, t0
 
-            check_asymptotes(cand, ref, comparison.model, settings.seed)
-    cand.joint_refit = record
-    return record
+
+def _null_baseline(ref, comparison, leader_nu: dict, settings, n_samples: int, parallel: bool):
+    """The baseline given the leader's global search (:func:`reexamine_leader`): ``(excess total dB, excess view
+    dB, raw total dB, which, simulations)`` of the best of the calibrated nuisances' :data:`STARTS` best Sobol
+    samples refined, and the leader's nuisances ``leader_nu``."""
+    from compare.comparison import compare
+    from scipy.stats import qmc
+
+    cal = comparison.calibration
+    model = comparison.model
+    names = tuple(cal.values)
+    params = _space(None, names)
+    us = qmc.Sobol(len(params), scramble=True, seed=settings.seed).random(n_samples)
+    chunks = np.array_split(np.arange(n_samples), 2 if parallel else 1)
+    errors = np.concatenate(_map(_null_errors, [(ref, model, names, us[c], settings) for c in chunks], parallel))
+    starts = [{p.name: float(p.from_u(us[i][j])) for j, p in enumerate(params)}
+              for i in np.argsort(errors)[:STARTS] if math.isfinite(errors[i])] + [dict(cal.values)]
+    refined = _map(_refine_null, [(ref, model, nu, settings) for nu in starts], parallel)
+    n_sims = n_samples + sum(r[1] for r in refined)
+    options = [("refitted", min(refined, key=lambda r: r[2])[0]), ("at_leader", dict(leader_nu))]
+    best = None
+    for kind, nu in options:
+        c = compare(ref.measurement, model.with_drivetrain(nu), seed=settings.seed, reference=ref)
+        r = c.evaluation.residuals
+        if best is None or r.excess_total_db < best[0]:
+            best = (float(r.excess_total_db), dict(r.excess_view_db), float(r.total_db), kind)
+    return (*best, n_sims + len(options))
+
+
+def _null_errors(ref, model, names: tuple, us: np.ndarray, settings) -> np.ndarray:
+    """The order view's error of the baseline at each row of ``us`` (one batch; inf where a simulation failed)."""
+    from compare.calibration_points import Point, evaluate_points
+
+    pts = [Point(np.asarray(u, float)) for u in us]
+    evaluate_points(ref, model, _space(None, names), pts, (), settings.seed, settings.search_solver(transient=False),
+                    [0], ("order",))
+    return np.array([q.error_db for q in pts])
+
+
+def _refine_null(ref, model, nuisance: dict, settings):
+    """The baseline's coordinate scans from one start (as :func:`_refine`): ``(nuisances, simulations, raw dB)``."""
+    from compare.calibration import CalibrationSettings, calibrate
+
+    cs = CalibrationSettings(parameters=tuple(nuisance), widths_u=REFINE_WIDTHS_U, points_per_side=REFINE_POINTS,
+                             views=("order",), seed=settings.seed)
+    c = calibrate(ref, model, settings=cs, start=nuisance, solver=settings.search_solver(transient=False))
+    return dict(c.values), c.n_simulations, c.error_db
+
+
+def _record(n_samples, settings, kept, best, current_db, cand, start_nu, n_sims, t0) -> dict:
+    return {"samples": n_samples, "starts": STARTS, "seed": int(settings.seed), "kept": bool(kept),
+            "chosen": best[1] if kept else "current", "error_before_db": float(current_db),
+            "error_after_db": float(best[0] if kept else current_db),
+            "params_before": _plain(cand.params), "nuisance_before": _plain(start_nu),
+            "n_simulations": int(n_sims), "elapsed_s": time.perf_counter() - t0}
+
+
+def _check_regime(cand, ref, comparison, settings) -> None:
+    if cand.path_regime:         # the refit moved the housing mode: is it located there?
+        from compare.path_regime import check_asymptotes
+
+        check_asymptotes(cand, ref, comparison.model, settings.seed)
 
 
 def joint_refit_message(effect: str, record: dict, params: dict, nuisance: dict) -> str:
@@ -174,6 +310,13 @@ def joint_refit_message(effect: str, record: dict, params: dict, nuisance: dict)
     ``joint_refit`` entry; ``params`` and ``nuisance``: the candidate's, after it)."""
     head = (f"{effect} refitted jointly with the drive-train nuisances over their whole range "
             f"({record['samples']} Sobol points, {record['starts']} + 1 starts refined)")
+    if record.get("reexamined"):       # reexamine_leader: the leader of a calibrated pass that claimed nothing
+        return (f"the calibrated pass claimed nothing, so its leader {effect} was re-examined: " + head[len(effect) + 1:]
+                + f", error {record['error_before_db']:.2f} -> {record['error_after_db']:.2f} dB, and the baseline "
+                f"given the same search {record['baseline_before_db']:.2f} -> "
+                f"{min(record['baseline_before_db'], record['baseline_refitted_db']):.2f} dB; reduction "
+                f"{100 * record['reduction_before']:.1f} -> {100 * record['reduction_after']:.1f} %, "
+                + ("claimed" if record.get("claimed") else "not claimed"))
     if not record["kept"]:
         return head + f": nothing lowered its error by 10 % ({record['error_before_db']:.2f} dB); its fit is kept"
     fmt = ", ".join(f"{k} {v:.4g}" if isinstance(v, float) else f"{k} {v}" for k, v in {**params, **nuisance}.items())
@@ -184,13 +327,14 @@ def _plain(d: dict) -> dict:
     return {k: (float(v) if isinstance(v, (int, float, np.floating)) else v) for k, v in d.items()}
 
 
-def _space(effect: str, nuisances: tuple):
-    """The search coordinates: the nuisances (log) and the effect's numeric fit parameters."""
+def _space(effect: str | None, nuisances: tuple):
+    """The search coordinates: the nuisances (log) and the effect's numeric fit parameters (none: None)."""
     from compare.calibration import nuisance_parameter
     from compare.fitspace import fit_space
     from datagen.effects import get
 
-    return [nuisance_parameter(n, 1.0) for n in nuisances] + list(fit_space(get(effect)).params)
+    own = list(fit_space(get(effect)).params) if effect is not None else []
+    return [nuisance_parameter(n, 1.0) for n in nuisances] + own
 
 
 def _global_stage(ref, model, cand, start_nu: dict, nuisances: tuple, settings, n: int, parallel: bool) -> list:
@@ -299,4 +443,4 @@ def _call(fn, payload: bytes):
     return fn(*pickle.loads(payload))
 
 
-__all__ = ["refit_claim_jointly", "joint_refit_message", "SAMPLES", "STARTS"]
+__all__ = ["refit_claim_jointly", "reexamine_leader", "joint_refit_message", "SAMPLES", "STARTS"]

@@ -235,11 +235,12 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
             if c.get("drivetrain_intervals"):
                 parts.append("<p><b>Chaotic record:</b> " + html.escape(drivetrains_message(
                     c["effect"], c["drivetrain_intervals"])) + ".</p>")
-        if top is not None and top.get("joint_refit"):
+        lead = top if top is not None else (att["candidates"][0] if att["candidates"] else None)
+        if lead is not None and lead.get("joint_refit") and (top is not None or lead["joint_refit"].get("reexamined")):
             from compare.joint_refit import joint_refit_message
 
             parts.append("<p><b>Joint refit:</b> " + html.escape(joint_refit_message(
-                top["effect"], top["joint_refit"], top["params"], top.get("nuisance") or {})) + ".</p>")
+                lead["effect"], lead["joint_refit"], lead["params"], lead.get("nuisance") or {})) + ".</p>")
         if top is not None and top.get("sideband_fit"):
             from compare.sideband_fit import sideband_fit_message
 

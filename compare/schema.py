@@ -325,7 +325,12 @@ SCHEMA = {
                                                             "box (compare.joint_refit): samples, starts, seed, kept, "
                                                             "chosen (current / refined / searched), error_before_db, "
                                                             "error_after_db, params_before, nuisance_before, "
-                                                            "n_simulations, elapsed_s; null: not run"}}}},
+                                                            "n_simulations, elapsed_s; the leader of a calibrated "
+                                                            "pass that claimed nothing "
+                                                            "(compare.joint_refit.reexamine_leader) also: reexamined "
+                                                            "(true), baseline_before_db, baseline_refitted_db, "
+                                                            "baseline_chosen, reduction_before, reduction_after, "
+                                                            "claimed; null: not run"}}}},
                 "unexplained": {"type": "array", "items": {"type": "object", "required": ["key", "text"]}},
                 "claimed": {"type": "array", "items": {"type": "string"}},
                 "rivals": {"type": "array", "items": {"type": "string"},

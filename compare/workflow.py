@@ -153,6 +153,9 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
     if att is not None and att.claimed and att.claimed[0].joint_refit is not None:
         top = att.claimed[0]
         messages.append(joint_refit_message(top.effect, top.joint_refit, top.params, top.nuisance))
+    elif att is not None and att.candidates and (att.candidates[0].joint_refit or {}).get("reexamined"):
+        top = att.candidates[0]         # a re-examined leader that stayed unclaimed (compare.joint_refit)
+        messages.append(joint_refit_message(top.effect, top.joint_refit, top.params, top.nuisance))
     if att is not None and att.claimed and att.claimed[0].sideband_fit is not None:
         messages.append(sideband_fit_message(att.claimed[0].effect, att.claimed[0].sideband_fit))
     res = comparison.evaluation.residuals
