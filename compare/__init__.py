@@ -18,7 +18,8 @@
 - ``candidates``    a fitted candidate, the attribution's result, and the claim and rival rules
 - ``attribution``   fit every missing registered effect, rank by error reduction, claim, flag the unexplained
 - ``nuisance_refit`` a calibrated attribution's leading candidates refitted with the nuisances (short scans)
-- ``joint_refit``   a calibrated pass's claimed effect refitted with the nuisances over their whole box
+- ``joint_refit``   a calibrated pass's claimed effect refitted with the nuisances over their whole box (its
+                    leader, re-examined so, when it claims nothing)
 - ``chaos``         a chaotic model (backlash rattle): several realisations, whole-record ladders, intervals
 - ``refit``         the effects already in the model fitted again, each against the model without it
 - ``channels``      further measured channels (encoders' transmission error, ...) settle rivals the sensor cannot
