@@ -216,7 +216,7 @@ def compare_and_attribute(measurement, model, *, reference=None, calibrate=None,
     from compare.candidates import AttributionSettings
     from compare.calibration import calibrated_compare
     from compare.comparison import prepare_reference
-    from compare.joint_refit import reexamine_leader, refit_claim_jointly, size_as_written
+    from compare.joint_refit import reexamine_leader, refit_claim_jointly
     from compare.sideband_fit import refit_on_sidebands
 
     mode = resolve_mode(model, calibrate)
@@ -238,21 +238,15 @@ def compare_and_attribute(measurement, model, *, reference=None, calibrate=None,
     c = calibrated_compare(measurement, model, reference=ref, seed=seed, calibrate_nuisances=mode is True)
     a = attributed(c)
     reason = escalation_reason(a) if mode == "auto" and a is not None else None
-
-    def sized(c, a):       # module docstring: the answer as written, its claim sized with the drive train free
-        if mode == "auto" and a is not None:
-            size_as_written(ref, c, a, settings, parallel=parallel)
-        return a
-
     if reason is None:
-        return Staged(c, sized(c, a), None, mode)
+        return Staged(c, a, None, mode)
     c2 = calibrated_compare(measurement, model, reference=ref, seed=seed, calibrate_nuisances=True)
     a2 = attributed(c2)
     end, end2 = ending_error_db(c, a), ending_error_db(c2, a2)
     if end2 > end:      # module docstring: the calibrated pass ends above the model as written's
         rejected = {"error_db": end2, "as_written_error_db": end, "claimed": a2.claimed[0].effect if a2.claimed else None,
                     "parameters": {k: float(v) for k, v in c2.calibration.values.items()}}
-        return Staged(c, sized(c, a), None, mode, rejected, reason)
+        return Staged(c, a, None, mode, rejected, reason)
     return Staged(c2, a2, (c, a), mode, None, reason)
 
 

@@ -97,8 +97,7 @@ REFINE_WIDTHS_U = (0.1, 0.03)
 REFINE_POINTS = (2, 2)
 
 
-def refit_claim_jointly(ref, comparison, attribution, settings, *, parallel: bool = True,
-                        as_written: bool = False) -> dict | None:
+def refit_claim_jointly(ref, comparison, attribution, settings, *, parallel: bool = True) -> dict | None:
     """Refit the nuisances and the claimed effect of ``attribution`` together (module docstring), in place.
 
     Parameters
@@ -111,10 +110,6 @@ def refit_claim_jointly(ref, comparison, attribution, settings, *, parallel: boo
         Its attribution; the first claimed candidate is refitted.
     settings : compare.candidates.AttributionSettings
         The attribution's settings (``seed``; ``joint_samples``: 0 switches this step off).
-    as_written : bool
-        ``comparison`` is the model as written (not calibrated), whose pass is the answer of an "auto" run
-        (:func:`compare.escalation.compare_and_attribute`): the claim is sized with the drive train free, from
-        the model's own values (:func:`size_as_written`).
 
     Returns
     -------
@@ -126,7 +121,7 @@ def refit_claim_jointly(ref, comparison, attribution, settings, *, parallel: boo
     cal = comparison.calibration
     claimed = attribution.claimed
     n_samples = int(settings.joint_samples)
-    if (cal is None) != as_written or not claimed or n_samples <= 0:
+    if cal is None or not claimed or n_samples <= 0:
         return None
     cand = claimed[0]
     if cand.joint_refit is not None or not _eligible(ref, comparison, cand):
@@ -136,40 +131,11 @@ def refit_claim_jointly(ref, comparison, attribution, settings, *, parallel: boo
     best = min(scored, key=lambda s: s[0])
     kept = best[1] != "current" and best[0] <= (1.0 - MIN_GAIN) * current_db
     record = _record(n_samples, settings, kept, best, current_db, cand, start_nu, n_sims, t0)
-    if as_written:
-        record["as_written"] = True
     if kept:
         _adopt(cand, ref, best, list(comparison.disagreements))
         _check_regime(cand, ref, comparison, settings)
     cand.joint_refit = record
     return record
-
-
-def size_as_written(ref, comparison, attribution, settings, *, parallel: bool = True) -> dict | None:
-    """Refit the claim of the model as written jointly with the drive train (:func:`refit_claim_jointly`), from
-    the model's own drive-train values, when that pass is the answer of an "auto" run: the claim is made and
-    kept as written, and only its amount is refitted with the nuisances free.
-
-    Why: the model's drive train is a guess (:mod:`compare.calibration`), and the amount of an effect is read
-    at it. Measured at stop 58 on the helical rig of :data:`compare.synthetic.OTHER_RIGS` (nuisances 2-3 times
-    off the defaults; noise seed 11) with a hidden pit of severity 0.2 on a pinion tooth: claimed as written at
-    64 % with severity 0.31 (outside the example's 0.05), the joint refit moved the drive train and the severity
-    to 0.199, the error 4.12 -> 1.74 dB. Done after the escalation decision, so the decision is made on the
-    as-written fit (whose drive train the reduction is measured at) and a joint refit does not stop a run from
-    escalating; kept only if it lowers the total error by :data:`compare.refit.MIN_GAIN`, as every joint refit.
-    """
-    from compare.calibration import drivetrain_values
-
-    model = comparison.model
-    names = tuple(model.calibration_settings().parameters)
-    cand = next(iter(attribution.claimed), None)
-    if cand is None or cand.nuisance:
-        return None
-    cand.nuisance = drivetrain_values(model, names)
-    rec = refit_claim_jointly(ref, comparison, attribution, settings, parallel=parallel, as_written=True)
-    if rec is None or not rec["kept"]:
-        cand.nuisance = {}           # not refitted: the claim stands at the model's own drive train
-    return rec
 
 
 def reexamine_leader(ref, comparison, attribution, settings, *, parallel: bool = True) -> dict | None:
@@ -261,7 +227,7 @@ def _joint_options(ref, comparison, cand, settings, n_samples: int, parallel: bo
     m = ref.measurement
     model = comparison.model
     start_nu = dict(cand.nuisance or cal.values)
-    trials = _global_stage(ref, model, cand, start_nu, tuple(start_nu), settings, n_samples, parallel)
+    trials = _global_stage(ref, model, cand, start_nu, tuple(cal.values), settings, n_samples, parallel)
     refined = _map(_refine, [(ref, model, cand.effect, params, nu, settings) for nu, params in trials], parallel)
     n_sims = n_samples + sum(r[2] for r in refined)
     best_nu, best_params, _, _, best_sigma = min(refined, key=lambda r: r[3])
@@ -344,8 +310,7 @@ def joint_refit_message(effect: str, record: dict, params: dict, nuisance: dict)
     """One line for the CLI and the report: what the joint refit of the claimed ``effect`` did (``record``: its
     ``joint_refit`` entry; ``params`` and ``nuisance``: the candidate's, after it)."""
     head = (f"{effect} refitted jointly with the drive-train nuisances over their whole range "
-            + ("from the model as written's " if record.get("as_written") else "")
-            + f"({record['samples']} Sobol points, {record['starts']} + 1 starts refined)")
+            f"({record['samples']} Sobol points, {record['starts']} + 1 starts refined)")
     if record.get("reexamined"):       # reexamine_leader: the leader of a calibrated pass that claimed nothing
         return (f"the calibrated pass claimed nothing, so its leader {effect} was re-examined: "
                 + head[len(effect) + 1:]
@@ -480,4 +445,4 @@ def _call(fn, payload: bytes):
     return fn(*pickle.loads(payload))
 
 
-__all__ = ["refit_claim_jointly", "reexamine_leader", "size_as_written", "joint_refit_message", "SAMPLES", "STARTS"]
+__all__ = ["refit_claim_jointly", "reexamine_leader", "joint_refit_message", "SAMPLES", "STARTS"]
