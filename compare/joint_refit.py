@@ -256,12 +256,13 @@ def _null_baseline(ref, comparison, leader_nu: dict, settings, n_samples: int, p
     params = _space(None, names)
     us = qmc.Sobol(len(params), scramble=True, seed=settings.seed).random(n_samples)
     chunks = np.array_split(np.arange(n_samples), 2 if parallel else 1)
-    errors = np.concatenate(_map(_null_errors, [(ref, model, names, us[c], settings) for c in chunks], parallel))
+    errors = np.concatenate(_map(_sample_errors, [(ref, model, None, {}, names, us[c], settings) for c in chunks],
+                                 parallel))
     starts = [{p.name: float(p.from_u(us[i][j])) for j, p in enumerate(params)}
               for i in np.argsort(errors)[:STARTS] if math.isfinite(errors[i])] + [dict(cal.values)]
-    refined = _map(_refine_null, [(ref, model, nu, settings) for nu in starts], parallel)
-    n_sims = n_samples + sum(r[1] for r in refined)
-    options = [("refitted", min(refined, key=lambda r: r[2])[0]), ("at_leader", dict(leader_nu))]
+    refined = _map(_refine, [(ref, model, None, {}, nu, settings) for nu in starts], parallel)
+    n_sims = n_samples + sum(r[2] for r in refined)
+    options = [("refitted", min(refined, key=lambda r: r[3])[0]), ("at_leader", dict(leader_nu))]
     best = None
     for kind, nu in options:
         c = compare(ref.measurement, model.with_drivetrain(nu), seed=settings.seed, reference=ref)
@@ -269,26 +270,6 @@ def _null_baseline(ref, comparison, leader_nu: dict, settings, n_samples: int, p
         if best is None or r.excess_total_db < best[0]:
             best = (float(r.excess_total_db), dict(r.excess_view_db), float(r.total_db), kind)
     return (*best, n_sims + len(options))
-
-
-def _null_errors(ref, model, names: tuple, us: np.ndarray, settings) -> np.ndarray:
-    """The order view's error of the baseline at each row of ``us`` (one batch; inf where a simulation failed)."""
-    from compare.calibration_points import Point, evaluate_points
-
-    pts = [Point(np.asarray(u, float)) for u in us]
-    evaluate_points(ref, model, _space(None, names), pts, (), settings.seed, settings.search_solver(transient=False),
-                    [0], ("order",))
-    return np.array([q.error_db for q in pts])
-
-
-def _refine_null(ref, model, nuisance: dict, settings):
-    """The baseline's coordinate scans from one start (as :func:`_refine`): ``(nuisances, simulations, raw dB)``."""
-    from compare.calibration import CalibrationSettings, calibrate
-
-    cs = CalibrationSettings(parameters=tuple(nuisance), widths_u=REFINE_WIDTHS_U, points_per_side=REFINE_POINTS,
-                             views=("order",), seed=settings.seed)
-    c = calibrate(ref, model, settings=cs, start=nuisance, solver=settings.search_solver(transient=False))
-    return dict(c.values), c.n_simulations, c.error_db
 
 
 def _record(n_samples, settings, kept, best, current_db, cand, start_nu, n_sims, t0) -> dict:
@@ -362,29 +343,31 @@ def _global_stage(ref, model, cand, start_nu: dict, nuisances: tuple, settings, 
     return out + [(dict(start_nu), dict(cand.params))]
 
 
-def _sample_errors(ref, model, effect: str, params: dict, nuisances: tuple, us: np.ndarray, settings) -> np.ndarray:
-    """The order view's error at each row of ``us`` (one batch; inf where a simulation failed)."""
+def _sample_errors(ref, model, effect: str | None, params: dict, nuisances: tuple, us: np.ndarray,
+                   settings) -> np.ndarray:
+    """The order view's error at each row of ``us`` (one batch; inf where a simulation failed); ``effect`` None:
+    the baseline."""
     from compare.calibration_points import Point, evaluate_points
     from datagen.effects import EffectSpec
 
     space = _space(effect, nuisances)
-    eff = EffectSpec.from_dict({"name": effect, **params}).build()
+    eff = EffectSpec.from_dict({"name": effect, **params}).build() if effect is not None else None
     pts = [Point(np.asarray(u, float)) for u in us]
-    evaluate_points(ref, model, space, pts, (eff,), settings.seed, settings.search_solver(transient=False), [0],
-              ("order",), free=eff)
+    evaluate_points(ref, model, space, pts, (eff,) if eff is not None else (), settings.seed,
+                    settings.search_solver(transient=False), [0], ("order",), free=eff)
     return np.array([q.error_db for q in pts])
 
 
-def _refine(ref, model, effect: str, params: dict, nuisance: dict, settings):
-    """Coordinate scans from one start, the effect free: ``(nuisances, params, simulations, raw total dB,
-    effect sigma)``."""
+def _refine(ref, model, effect: str | None, params: dict, nuisance: dict, settings):
+    """Coordinate scans from one start, the effect free (``effect`` None: the baseline): ``(nuisances, params,
+    simulations, raw total dB, effect sigma)``."""
     from compare.calibration import CalibrationSettings, calibrate
     from datagen.effects import EffectSpec
 
     cs = CalibrationSettings(parameters=tuple(nuisance), widths_u=REFINE_WIDTHS_U, points_per_side=REFINE_POINTS,
                              views=("order",), seed=settings.seed)
-    eff = EffectSpec.from_dict({"name": effect, **params}).build()
-    c = calibrate(ref, model, extra_effects=(eff,), settings=cs, start=nuisance, free_effect=True,
+    extra = (EffectSpec.from_dict({"name": effect, **params}).build(),) if effect is not None else ()
+    c = calibrate(ref, model, extra_effects=extra, settings=cs, start=nuisance, free_effect=bool(extra),
                   solver=settings.search_solver(transient=False))
     return dict(c.values), {**params, **c.effect_params}, c.n_simulations, c.error_db, dict(c.effect_sigma)
 
