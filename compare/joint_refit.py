@@ -155,9 +155,10 @@ def reexamine_leader(ref, comparison, attribution, settings, *, parallel: bool =
     Fair terms: the baseline gets the same global search as the leader - as many Sobol points over the
     nuisances (the leader's are over its own parameters too), the :data:`STARTS` best and the calibrated values
     refined by the same scans, the best by the total error of a whole comparison - and it is also compared at
-    the nuisances the leader's refit ended on (:func:`compare.nuisance_refit.refine_nuisances` says why). The leader's reduction is measured against the
-    lowest of these baselines and the calibrated one, and the claim rule (:func:`compare.candidates.choose_claim`)
-    runs again over all candidates (the others keep their reductions against the calibrated baseline). What more
+    the nuisances the leader's refit ended on (:func:`compare.nuisance_refit.refine_nuisances` says why). The
+    leader's reduction is measured against the lowest of these baselines and the calibrated one, and the claim
+    rule (:func:`compare.candidates.choose_claim`) runs again over all candidates (the others keep their
+    reductions against the calibrated baseline). What more
     fitting of the drive train gives is thus not credited to the effect; a control with nothing hidden gains on
     both sides alike (``tests/test_compare_leader_refit.py``: the healthy helical rig, the baseline 2.35 -> 0.42 dB,
     the leading housing mode 47 % -> -5 %, unclaimed). Only the first-ranked candidate, only on the
@@ -245,8 +246,9 @@ def _joint_options(ref, comparison, cand, settings, n_samples: int, parallel: bo
 
 def _null_baseline(ref, comparison, leader_nu: dict, settings, n_samples: int, parallel: bool):
     """The baseline given the leader's global search (:func:`reexamine_leader`): ``(excess total dB, excess view
-    dB, raw total dB, which, simulations)`` of the best of the calibrated nuisances' :data:`STARTS` best Sobol
-    samples refined, and the leader's nuisances ``leader_nu``."""
+    dB, raw total dB, which, simulations)`` of the better of two drive trains: the best refinement (by the order
+    view) from the :data:`STARTS` best Sobol samples and the calibrated values ("refitted"), and the leader's
+    nuisances ``leader_nu`` ("at_leader"), compared by the whole comparison's total excess error."""
     from compare.comparison import compare
     from scipy.stats import qmc
 
