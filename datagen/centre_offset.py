@@ -45,7 +45,7 @@ COMPILED = True
 _BLOCK_ELEMENTS = 1 << 16
 
 
-def slots_at_centre_offset(stiffness, dx_m, dy_m, *, subdivisions: int = 1) -> np.ndarray:
+def slots_at_centre_offset(stiffness, dx_m, dy_m, *, subdivisions: int = 1, cycles=None) -> np.ndarray:
     """Pair stiffnesses (N/m) of a record whose wheel centre is displaced by ``(dx, dy)`` (m) relative to the
     pinion centre, on ``subdivisions`` points per position step of ``stiffness``.
 
@@ -61,6 +61,11 @@ def slots_at_centre_offset(stiffness, dx_m, dy_m, *, subdivisions: int = 1) -> n
         to T2; T1 at polar angle ``-alpha_w`` on the pinion base circle).
     subdivisions : int
         Record points per position step (module docstring). 1: the grid of ``stiffness`` itself.
+    cycles : array_like of int, optional
+        The mesh cycle each of the record's ``n`` cycles stands for (default ``0 .. n - 1``): a record of some
+        cycles of a longer period (:func:`datagen.mesh_excitation.mesh_record`'s truncated records). Only a pitted
+        pair's samples depend on it (which engagement of which tooth is pitted); ``dx``, ``dy`` are given per
+        point anyway, and a record's last point is interpolated towards its first as in a periodic one.
 
     Returns
     -------
@@ -157,6 +162,10 @@ def slots_at_centre_offset(stiffness, dx_m, dy_m, *, subdivisions: int = 1) -> n
     scaled = []
     if stiffness._overrides:
         cyc = np.arange(dg_grid.size) // ppc
+        if cycles is not None:
+            cycles = np.asarray(cycles, dtype=np.int64)
+            require(cycles.shape == (n_cycles,), "cycles", cycles.shape, f"one mesh cycle per record cycle ({n_cycles})")
+            cyc = cycles[cyc]
         for (m, s), kk in stiffness._overrides.items():
             rows = np.nonzero((cyc - s) % stiffness.period_cycles == m)[0]
             kn = stiffness._k_cycle[rows % ppc, s]          # the nominal record repeats every cycle

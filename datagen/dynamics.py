@@ -233,7 +233,7 @@ def _merge_step_counts(items: dict[int, tuple[int, int, int]], slack: float = 1.
 # ---------------------------------------------------------------------- shared set-up
 def static_state(c: DynamicCase):
     """Static equilibrium under the mean mesh stiffness and mean error force; pinion wind-up in mesh cycles."""
-    e_mean = float(np.mean(c.record.error_force))
+    e_mean = c.record.mean_error_force_n
     q_s = c.model.static_deflection(error_force_n=e_mean)
     x_s = c.model.pair.pinion.teeth * q_s[c.model.index("phi_1")] / (2 * np.pi)
     return q_s, x_s

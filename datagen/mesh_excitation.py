@@ -40,6 +40,22 @@ class MeshRecord:
     e_slots: np.ndarray
     edges: str = "point"            # the stiffness record's contact edges (datagen.stiffness.contact_fraction)
     subdivisions: int = 1           # record points per stiffness-record position (hook 2c refines by SUBDIVISIONS)
+    #: a truncated record (:func:`mesh_record`, ``cycles_needed``): the mesh positions (cycles, lo, hi) it holds
+    #: exactly, read as a periodic one; None: the whole period
+    valid_cycles: tuple | None = None
+    #: a truncated record's mean stiffness (N/m) and error force (N) (:func:`mesh_record`); None: the arrays' means
+    mean_k: float | None = None
+    mean_error_force: float | None = None
+
+    @property
+    def mean_k_n_per_m(self) -> float:
+        """Mean mesh stiffness over the period (N/m): the lumped model's mean stiffness."""
+        return float(np.mean(self.k)) if self.mean_k is None else self.mean_k
+
+    @property
+    def mean_error_force_n(self) -> float:
+        """Mean error force (N): the static state's."""
+        return float(np.mean(self.error_force)) if self.mean_error_force is None else self.mean_error_force
 
     @property
     def n_pos(self) -> int:
@@ -49,8 +65,15 @@ class MeshRecord:
     def has_error(self) -> bool:
         return bool(np.any(self.error_force != 0))
 
+    @property
+    def stored_cycles(self) -> int:
+        """Mesh cycles the arrays hold: ``period_cycles``, or fewer for a truncated record."""
+        return self.n_pos // self.positions_per_cycle
+
     def distinct_cycles(self) -> int:
         """Number of different mesh cycles in the record (1 for a healthy pair; P when every cycle differs)."""
+        if getattr(self, "valid_cycles", None) is not None:
+            raise ValueError("distinct_cycles: a truncated record does not hold its whole period")
         P, ppc = self.period_cycles, self.positions_per_cycle
         k = self.k.reshape(P, ppc) / np.abs(self.k).max()
         e = self.error_force.reshape(P, ppc) / max(np.abs(self.error_force).max(), 1e-300)
@@ -102,14 +125,31 @@ def _grid_index(x, ppc, n):
     return i0 % n, f
 
 
-def mesh_record(stiffness, effects, ctx, *, keep_slots: bool = True) -> MeshRecord:
+def mesh_record(stiffness, effects, ctx, *, keep_slots: bool = True, cycles_needed: int | None = None) -> MeshRecord:
     """Apply hooks 1 and 2 of ``effects`` to ``stiffness`` and build the periodic record.
 
     ``keep_slots=False``: the per-pair ``k_slots`` and ``e_slots`` are not kept (zero columns), for a case whose
     mesh law is linear and reads only ``k`` and ``error_force`` (:func:`datagen.simulate.prepare`); ``k`` and
     ``error_force`` are the same to the bit. Why: they are four fifths of a record's memory, and with errors on
     both gears a record spans the hunting period (spur-gds, 2900 mesh cycles: 0.48 GB with them, 0.1 GB without,
-    at 2048 points per cycle)."""
+    at 2048 points per cycle).
+
+    ``cycles_needed``: a time-stepped case reads the record only from its start position over the cycles it
+    rolls through (:func:`datagen.simulate.prepare` passes them). When the record has moving centres (hook 2c,
+    the costly part) and its period exceeds them by more than
+    :data:`TRUNCATE_MARGIN_CYCLES`, the record holds only those cycles (and one more) and the
+    :data:`TRUNCATE_BEHIND_CYCLES` before cycle 0 (at its end, where a periodic lookup of a slightly negative position reads them), each the same
+    as in the whole record; ``valid_cycles`` says which positions it holds exactly
+    (:func:`datagen.time_stepping.transient_response` checks that the run stayed in them). The period is not
+    reduced (:func:`minimal_period`): a truncated record is not periodic. Its mean stiffness (the lumped model's)
+    is the whole record's: the stiffness repeats after the stiffness's and the centres' periods (a wheel
+    revolution), and the mean is taken over whole ones of them; the mean error force (the static start) over
+    the same cycles, an estimate (the deviations' hunting period is not held), whose error decays with the
+    start-up. Why: with errors on both gears a record
+    spans the hunting period, and one with a moving centre (hook 2c) costs a case most of its time: measured on
+    the helical rig of ``experiments/generalisation_check.py`` (17/60 teeth, 1500 rpm, a grade-7 pitch error in
+    the model, a wheel eccentricity fitted on a 0.5 s window: 1020 cycles), 12 s of a case's 12.4 s.
+    """
     # an effect that rebuilds the stiffness from the pair and its pits (a tooth pit) first, then those that
     # correct it (the Hertz term), so that no correction is lost; otherwise in the case's order
     hook1 = [e for e in effects if "mesh_stiffness" in e.hooks()]
@@ -125,22 +165,37 @@ def mesh_record(stiffness, effects, ctx, *, keep_slots: bool = True) -> MeshReco
     P = P0
     for e in tooth_fx + angle_fx + centre_fx:
         P = math.lcm(P, int(e.deviation_period_cycles(ctx)))
+    # the cycles the record holds: all P, or (truncated) 0 .. ahead - 1 and the last TRUNCATE_BEHIND_CYCLES ones
+    cycles, valid = np.arange(P), None
+    if (centre_fx and cycles_needed is not None
+            and int(cycles_needed) + 1 + TRUNCATE_BEHIND_CYCLES + TRUNCATE_MARGIN_CYCLES < P):
+        # one cycle more than needed: a record point interpolates towards the next grid sample, and the last
+        # cycle's next one (a cycle behind 0) is not its own
+        ahead = int(cycles_needed)
+        cycles = np.concatenate([np.arange(ahead + 1), np.arange(P - TRUNCATE_BEHIND_CYCLES, P)])
+        valid = (-float(TRUNCATE_BEHIND_CYCLES), float(ahead))
+    n_cyc = cycles.size
     # hook 2c: the record on SUBDIVISIONS points per grid step, so that sub-step moves of the contact edges keep
     # the nominal edge ramps (datagen.centre_offset)
     q = SUBDIVISIONS if centre_fx else 1
-    x = np.arange(P * ppc * q) / (ppc * q)
+    x = (cycles[:, None] + np.arange(ppc * q)[None, :] / (ppc * q)).ravel()
     th1, th2 = 2 * np.pi * x / z1, 2 * np.pi * x / z2
     if centre_fx:   # the pair at the moving centres (one more slot: an early entry)
         offs = [np.broadcast_to(np.asarray(e.centre_offset_m(th1, th2, ctx), float), (2,) + x.shape) for e in centre_fx]
-        k_slots = _slots_at_centre_offset_reused(stiffness, sum(o[0] for o in offs), sum(o[1] for o in offs), q)
+        k_slots = _slots_at_centre_offset_reused(stiffness, sum(o[0] for o in offs), sum(o[1] for o in offs), q,
+                                                 None if valid is None else cycles)
     else:
         k_slots = np.tile(stiffness.k_slots_n_per_m[:P0 * ppc], (P // P0, 1))
+        if valid is not None:
+            k_slots = k_slots.reshape(P, ppc, -1)[cycles].reshape(n_cyc * ppc, -1)
     if tooth_fx:
         def f(g, pt, wt):
             return sum(e.tooth_deviation_m(g, pt, wt, ctx) for e in tooth_fx)
 
         e_force_slots = stiffness.weighted(f, n_cycles=P, position_free=all(e.tooth_deviation_position_free
                                                                              for e in tooth_fx))
+        if valid is not None:
+            e_force_slots = e_force_slots.reshape(P, ppc, -1)[cycles].reshape(n_cyc * ppc, -1)
         if centre_fx:   # the deviations of the nominal contact positions; the early pair has none before its start
             e_force_slots = refine_slots(e_force_slots, ppc, q)
     else:
@@ -149,22 +204,38 @@ def mesh_record(stiffness, effects, ctx, *, keep_slots: bool = True) -> MeshReco
         e_ang = sum(np.asarray(e.angle_deviation_m(th1, th2, ctx), float) for e in angle_fx)
         e_force_slots = e_force_slots + k_slots * e_ang[:, None]
     k, E = k_slots.sum(axis=1), e_force_slots.sum(axis=1)
-    P_min = minimal_period(P, ppc * q, k, E)
-    n = P_min * ppc * q
+    P_min = minimal_period(P, ppc * q, k, E) if valid is None else P
+    n = (P_min if valid is None else n_cyc) * ppc * q
+    means = {}
+    if valid is not None:
+        # the stiffness repeats after the stiffness's and the moving centres' periods (the deviations move E only):
+        # its mean over whole such periods is the record's; E's over the whole periods held, an estimate
+        P_k = P0
+        for e in centre_fx:
+            P_k = math.lcm(P_k, int(e.deviation_period_cycles(ctx)))
+        n_mean = (int(valid[1]) // P_k) * P_k or int(valid[1])
+        means = {"mean_k": float(np.mean(k[:n_mean * ppc * q])), "mean_error_force": float(np.mean(E[:n_mean * ppc * q]))}
     if keep_slots:
         with np.errstate(invalid="ignore", divide="ignore"):
             e_slots = np.where(k_slots[:n] > 0, e_force_slots[:n] / k_slots[:n], 0.0)
     else:
         k_slots = e_slots = np.zeros((k.size, 0))
     return MeshRecord(period_cycles=P_min, positions_per_cycle=ppc * q, k=k[:n], error_force=E[:n], k_slots=k_slots[:n],
-                      e_slots=e_slots[:n], edges=stiffness.edges, subdivisions=q)
+                      e_slots=e_slots[:n], edges=stiffness.edges, subdivisions=q, valid_cycles=valid, **means)
 
 
-#: the last record of :func:`slots_at_centre_offset` made by :func:`mesh_record`: (stiffness, q, dx, dy, k_slots)
+#: a truncated record (:func:`mesh_record`) holds this many cycles before cycle 0 (a time-stepped case starts at
+#: its static wind-up, a fraction of a cycle either side of 0, and its dynamic angle moves by far less than a cycle)
+TRUNCATE_BEHIND_CYCLES = 2
+#: ... and is made only when the period exceeds the cycles it holds by at least this many (else the whole one)
+TRUNCATE_MARGIN_CYCLES = 8
+
+
+#: the last record of :func:`slots_at_centre_offset` made by :func:`mesh_record`: (stiffness, q, dx, dy, k_slots, cycles)
 _LAST_SLOTS: list = []
 
 
-def _slots_at_centre_offset_reused(stiffness, dx, dy, q: int) -> np.ndarray:
+def _slots_at_centre_offset_reused(stiffness, dx, dy, q: int, cycles=None) -> np.ndarray:
     """:func:`slots_at_centre_offset`, reusing the previous call's result when the stiffness record is the same
     object and the displacements the same values.
 
@@ -177,13 +248,15 @@ def _slots_at_centre_offset_reused(stiffness, dx, dy, q: int) -> np.ndarray:
     """
     dx = np.asarray(dx, dtype=float)
     dy = np.broadcast_to(np.asarray(dy, dtype=float), dx.shape)
+    cyc = None if cycles is None else np.asarray(cycles, dtype=np.int64)
     if (_LAST_SLOTS and _LAST_SLOTS[0] is stiffness and _LAST_SLOTS[1] == q and np.array_equal(_LAST_SLOTS[2], dx)
-            and np.array_equal(_LAST_SLOTS[3], dy)):
+            and np.array_equal(_LAST_SLOTS[3], dy)
+            and (cyc is None) == (_LAST_SLOTS[5] is None) and (cyc is None or np.array_equal(cyc, _LAST_SLOTS[5]))):
         return _LAST_SLOTS[4]
     _LAST_SLOTS.clear()
-    k_slots = slots_at_centre_offset(stiffness, dx, dy, subdivisions=q)
+    k_slots = slots_at_centre_offset(stiffness, dx, dy, subdivisions=q, cycles=cyc)
     k_slots.flags.writeable = False
-    _LAST_SLOTS.extend((stiffness, q, dx, dy, k_slots))
+    _LAST_SLOTS.extend((stiffness, q, dx, dy, k_slots, cyc))
     return k_slots
 
 

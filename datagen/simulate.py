@@ -274,8 +274,9 @@ def prepare(case: Case) -> dynamics.DynamicCase:
                         n_slices=so.n_slices, pit_model=so.pit_model, edges=so.edges)
     dofs = ("phi_m", "phi_1", "y_1", "phi_2", "y_2", "phi_b") + (("z_1", "z_2") if case.pair.is_helical else ())
     ctx = case.context(dofs)
-    rec = mesh_record(ms, case.effects, ctx, keep_slots=any(e.is_nonlinear for e in case.effects))
-    model = build_model(case.pair, case.drivetrain, k_mean_n_per_m=float(np.mean(rec.k)),
+    rec = mesh_record(ms, case.effects, ctx, keep_slots=any(e.is_nonlinear for e in case.effects),
+                      cycles_needed=cycles_rolled(case))
+    model = build_model(case.pair, case.drivetrain, k_mean_n_per_m=rec.mean_k_n_per_m,
                         torque_nm=case.operating.torque_nm)
     return dynamics.DynamicCase(model=model, record=rec, effects=case.effects, ctx=ctx,
                                 speed_rpm=case.operating.speed_rpm, torque_nm=case.operating.torque_nm,
@@ -283,6 +284,26 @@ def prepare(case: Case) -> dynamics.DynamicCase:
                                 omega_dt=case.solver.step_for(case.effects), method=case.solver.method,
                                 transient_s=case.solver.transient_s,
                                 mesh_angle=case.solver.mesh_angle, step_limit=case.solver.step_limit)
+
+
+#: :func:`cycles_rolled`: the mesh cycles of a time-stepped run, times this (a speed fluctuation turns the pinion
+#: ahead of its mean angle by its amplitude over its angular frequency: a few per cent of a run, at most), plus
+#: ROLL_SPARE_CYCLES
+ROLL_FACTOR = 1.1
+ROLL_SPARE_CYCLES = 4
+
+
+def cycles_rolled(case: Case) -> int | None:
+    """The mesh cycles a time-stepped case rolls through (its start-up and its record, with the margins
+    :data:`ROLL_FACTOR`, :data:`ROLL_SPARE_CYCLES`), so that its mesh record need hold no more
+    (:func:`datagen.mesh_excitation.mesh_record`); None when it may run on the periodic path, or its start-up is
+    not given (:attr:`datagen.dynamics.DynamicCase.discard_s` then rounds it to whole record periods)."""
+    so = case.solver
+    stepped = so.method == "transient" or any(e.is_nonlinear or e.is_nonstationary for e in case.effects)
+    if not stepped or so.transient_s is None:
+        return None
+    seconds = float(so.transient_s) + float(case.duration_s) + 2.0 / float(case.fs_hz)
+    return int(math.ceil(ROLL_FACTOR * seconds * case.pair.mesh_frequency_hz(case.operating.speed_rpm))) + ROLL_SPARE_CYCLES
 
 
 def effect_rng(seed: int, position: int) -> np.random.Generator:

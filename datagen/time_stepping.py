@@ -181,6 +181,7 @@ def transient_response(cases, R: int, n_discard: int) -> list[Response]:
         out_rows = (steps - n_discard) % R == 0
         out_rows &= steps >= n_discard
         theta_out.append(theta_steps["theta"][out_rows])
+    _check_rolled(cases, x_static, z1_per_rad * state["theta"] + x_static)
     vals = np.ascontiguousarray(np.concatenate(kept)[:n_out].reshape(n_out, C, len(names)).transpose(1, 2, 0))
     theta1 = np.concatenate(theta_out)[:n_out]
     out = []
@@ -188,11 +189,31 @@ def transient_response(cases, R: int, n_discard: int) -> list[Response]:
         ch = finish(vals[j], names, theta1[:, j], co["gear_ratio"][j])
         out.append(Response(ch, {
             "method": "transient", "dt_s": dt, "decimation": R, "transient_discarded_s": n_discard * dt,
-            "period_cycles": c.record.period_cycles,
+            "period_cycles": c.record.period_cycles, "record_cycles": c.record.stored_cycles,
             "start_time_s": n_discard * dt, "newton_unconverged_steps": bad_total,
             "natural_frequencies_hz": c.model.natural_frequencies_hz.tolist(),
             "mesh_damping_n_s_per_m": c.model.c_mesh_n_s_per_m}))
     return out
+
+
+#: mesh cycles a truncated record must hold beyond a run's start and end (the pinion's dynamic angle: a fraction of
+#: a cycle)
+ROLL_SLACK_CYCLES = 0.5
+
+
+def _check_rolled(cases, x_start, x_end) -> None:
+    """Raise when a case with a truncated mesh record (:func:`datagen.mesh_excitation.mesh_record`) rolled out of
+    the cycles it holds (its reference angle from ``x_start`` to ``x_end``, mesh cycles, less
+    :data:`ROLL_SLACK_CYCLES`): its record would have been read where it does not hold the period's values."""
+    for j, c in enumerate(cases):
+        valid = c.record.valid_cycles
+        if valid is None:
+            continue
+        lo, hi = float(min(x_start[j], x_end[j])), float(max(x_start[j], x_end[j]))
+        if lo - ROLL_SLACK_CYCLES < valid[0] or hi + ROLL_SLACK_CYCLES > valid[1]:
+            raise RuntimeError(f"time stepping: case {j} rolled through mesh cycles {lo:.2f} .. {hi:.2f}, but its "
+                               f"truncated mesh record holds {valid[0]:g} .. {valid[1]:g} "
+                               f"(datagen.simulate.cycles_rolled underestimated the run)")
 
 
 def _compiled_law(nonlinear, C: int):

@@ -369,7 +369,7 @@ def test_a_linear_case_keeps_no_per_pair_slots_and_gives_the_same_bits(monkeypat
     assert sim.prepare(backlash).record.k_slots.shape[1] >= 2
     got = simulate([periodic, stepped])
     assert got[0].metadata["solver"]["method"] == "periodic"
-    monkeypatch.setattr(sim, "mesh_record", lambda ms, effects, ctx, keep_slots=True: mesh_record(ms, effects, ctx))
+    monkeypatch.setattr(sim, "mesh_record", lambda ms, effects, ctx, keep_slots=True, **kw: mesh_record(ms, effects, ctx, **kw))
     full = sim.prepare(stepped).record
     assert full.k_slots.shape[1] >= 2
     assert np.array_equal(full.k, lean.k) and np.array_equal(full.error_force, lean.error_force)
