@@ -275,7 +275,7 @@ def prepare(case: Case) -> dynamics.DynamicCase:
     dofs = ("phi_m", "phi_1", "y_1", "phi_2", "y_2", "phi_b") + (("z_1", "z_2") if case.pair.is_helical else ())
     ctx = case.context(dofs)
     rec = mesh_record(ms, case.effects, ctx, keep_slots=any(e.is_nonlinear for e in case.effects),
-                      cycles_needed=cycles_rolled(case))
+                      cycles_needed=cycles_rolled(case, ctx))
     model = build_model(case.pair, case.drivetrain, k_mean_n_per_m=rec.mean_k_n_per_m,
                         torque_nm=case.operating.torque_nm)
     return dynamics.DynamicCase(model=model, record=rec, effects=case.effects, ctx=ctx,
@@ -286,24 +286,43 @@ def prepare(case: Case) -> dynamics.DynamicCase:
                                 mesh_angle=case.solver.mesh_angle, step_limit=case.solver.step_limit)
 
 
-#: :func:`cycles_rolled`: the mesh cycles of a time-stepped run, times this (a speed fluctuation turns the pinion
-#: ahead of its mean angle by its amplitude over its angular frequency: a few per cent of a run, at most), plus
+#: :func:`cycles_rolled`: the mesh cycles of a time-stepped run's reference angle (its speed integrated, speed
+#: fluctuations included), times this (the pinion's dynamic angle and the integration's sampling), plus
 #: ROLL_SPARE_CYCLES
 ROLL_FACTOR = 1.1
 ROLL_SPARE_CYCLES = 4
+#: time points per second (at least 4096 in all) on which cycles_rolled integrates a fluctuating speed
+ROLL_POINTS_PER_S = 20000
 
 
-def cycles_rolled(case: Case) -> int | None:
+def cycles_rolled(case: Case, ctx=None) -> int | None:
     """The mesh cycles a time-stepped case rolls through (its start-up and its record, with the margins
     :data:`ROLL_FACTOR`, :data:`ROLL_SPARE_CYCLES`), so that its mesh record need hold no more
     (:func:`datagen.mesh_excitation.mesh_record`); None when it may run on the periodic path, or its start-up is
-    not given (:attr:`datagen.dynamics.DynamicCase.discard_s` then rounds it to whole record periods)."""
+    not given (:attr:`datagen.dynamics.DynamicCase.discard_s` then rounds it to whole record periods).
+
+    An effect that moves the operating point (a speed fluctuation: up to 20 % for a while at a low frequency)
+    changes the cycles: the speed is then integrated as the time loop does (trapezoids, on
+    :data:`ROLL_POINTS_PER_S`; ``ctx``: the case's effect context, made if not given)."""
     so = case.solver
     stepped = so.method == "transient" or any(e.is_nonlinear or e.is_nonstationary for e in case.effects)
     if not stepped or so.transient_s is None:
         return None
     seconds = float(so.transient_s) + float(case.duration_s) + 2.0 / float(case.fs_hz)
-    return int(math.ceil(ROLL_FACTOR * seconds * case.pair.mesh_frequency_hz(case.operating.speed_rpm))) + ROLL_SPARE_CYCLES
+    cycles = seconds * case.pair.mesh_frequency_hz(case.operating.speed_rpm)
+    op_fx = [e for e in case.effects if "operating_point" in e.hooks()]
+    if op_fx:
+        if ctx is None:
+            ctx = case.context(("phi_m", "phi_1", "y_1", "phi_2", "y_2", "phi_b"))
+        t = np.linspace(0.0, seconds, max(4096, int(ROLL_POINTS_PER_S * seconds)))
+        speed = np.full(t.size, float(case.operating.speed_rpm))
+        torque = np.full(t.size, float(case.operating.torque_nm))
+        for e in op_fx:
+            speed, torque = e.operating_point(t, speed, torque, ctx)
+        speed = np.abs(np.broadcast_to(np.asarray(speed, float), t.shape))
+        turns = float(np.sum(0.5 * (speed[1:] + speed[:-1]) * np.diff(t))) / 60.0
+        cycles = max(cycles, turns * case.pair.pinion.teeth)
+    return int(math.ceil(ROLL_FACTOR * cycles)) + ROLL_SPARE_CYCLES
 
 
 def effect_rng(seed: int, position: int) -> np.random.Generator:
