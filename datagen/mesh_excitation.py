@@ -136,10 +136,10 @@ def mesh_record(stiffness, effects, ctx, *, keep_slots: bool = True, cycles_need
 
     ``cycles_needed``: a time-stepped case reads the record only from its start position over the cycles it
     rolls through (:func:`datagen.simulate.prepare` passes them). When the record has moving centres (hook 2c,
-    the costly part) and its period exceeds them by more than
-    :data:`TRUNCATE_MARGIN_CYCLES`, the record holds only those cycles (and one more) and the
-    :data:`TRUNCATE_BEHIND_CYCLES` before cycle 0 (at its end, where a periodic lookup of a slightly negative position reads them), each the same
-    as in the whole record; ``valid_cycles`` says which positions it holds exactly
+    the costly part) and its period exceeds them by more than :data:`TRUNCATE_MARGIN_CYCLES`, the record holds
+    only those cycles (and one more) and the :data:`TRUNCATE_BEHIND_CYCLES` before cycle 0 (at its end, where a
+    periodic lookup of a slightly negative position reads them), each the same as in the whole record;
+    ``valid_cycles`` says which positions it holds exactly
     (:func:`datagen.time_stepping.transient_response` checks that the run stayed in them). The period is not
     reduced (:func:`minimal_period`): a truncated record is not periodic. Its mean stiffness (the lumped model's)
     is the whole record's: the stiffness repeats after the stiffness's and the centres' periods (a wheel
@@ -185,9 +185,7 @@ def mesh_record(stiffness, effects, ctx, *, keep_slots: bool = True, cycles_need
         k_slots = _slots_at_centre_offset_reused(stiffness, sum(o[0] for o in offs), sum(o[1] for o in offs), q,
                                                  None if valid is None else cycles)
     else:
-        k_slots = np.tile(stiffness.k_slots_n_per_m[:P0 * ppc], (P // P0, 1))
-        if valid is not None:
-            k_slots = k_slots.reshape(P, ppc, -1)[cycles].reshape(n_cyc * ppc, -1)
+        k_slots = np.tile(stiffness.k_slots_n_per_m[:P0 * ppc], (P // P0, 1))   # whole: truncated only with centres
     if tooth_fx:
         def f(g, pt, wt):
             return sum(e.tooth_deviation_m(g, pt, wt, ctx) for e in tooth_fx)

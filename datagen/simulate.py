@@ -45,7 +45,7 @@ from datagen.effects import EffectContext, build_effects
 from datagen.flank import PitMap
 from datagen.geometry import GearPair
 from datagen.pair_file import pair_from_dict
-from datagen.lumped_model import DriveTrain, build_model
+from datagen.lumped_model import HELICAL_DOFS, SPUR_DOFS, DriveTrain, build_model
 from datagen.case_options import PASS_FRACTION as _PASS
 from datagen.case_options import (OperatingPoint, SolverOptions, StiffnessOptions,  # noqa: F401  (re-exported)
                                   auto_positions_per_cycle, options_from_table)
@@ -272,8 +272,7 @@ def prepare(case: Case) -> dynamics.DynamicCase:
         case.fs_hz, case.pair.mesh_frequency_hz(case.operating.speed_rpm))
     ms = mesh_stiffness(case.pair, pits=case.pit_map(), positions_per_cycle=ppc,
                         n_slices=so.n_slices, pit_model=so.pit_model, edges=so.edges)
-    dofs = ("phi_m", "phi_1", "y_1", "phi_2", "y_2", "phi_b") + (("z_1", "z_2") if case.pair.is_helical else ())
-    ctx = case.context(dofs)
+    ctx = case.context(case_dofs(case))
     rec = mesh_record(ms, case.effects, ctx, keep_slots=any(e.is_nonlinear for e in case.effects),
                       cycles_needed=cycles_rolled(case, ctx))
     model = build_model(case.pair, case.drivetrain, k_mean_n_per_m=rec.mean_k_n_per_m,
@@ -284,6 +283,11 @@ def prepare(case: Case) -> dynamics.DynamicCase:
                                 omega_dt=case.solver.step_for(case.effects), method=case.solver.method,
                                 transient_s=case.solver.transient_s,
                                 mesh_angle=case.solver.mesh_angle, step_limit=case.solver.step_limit)
+
+
+def case_dofs(case: Case) -> tuple:
+    """The lumped model's degrees of freedom for ``case``'s pair (a helical pair adds the axial ones)."""
+    return HELICAL_DOFS if case.pair.is_helical else SPUR_DOFS
 
 
 #: :func:`cycles_rolled`: the mesh cycles of a time-stepped run's reference angle (its speed integrated, speed
@@ -313,7 +317,7 @@ def cycles_rolled(case: Case, ctx=None) -> int | None:
     op_fx = [e for e in case.effects if "operating_point" in e.hooks()]
     if op_fx:
         if ctx is None:
-            ctx = case.context(("phi_m", "phi_1", "y_1", "phi_2", "y_2", "phi_b"))
+            ctx = case.context(case_dofs(case))
         t = np.linspace(0.0, seconds, max(4096, int(ROLL_POINTS_PER_S * seconds)))
         speed = np.full(t.size, float(case.operating.speed_rpm))
         torque = np.full(t.size, float(case.operating.torque_nm))
