@@ -220,8 +220,8 @@ def long_period_candidates(names_: list, ref: Reference, model) -> list:
     pitch error grade 8.0 and 7.8 (true 8). A window case's record holds only the cycles it rolls through, not the
     hunting period (:func:`datagen.mesh_excitation.mesh_record`, ``cycles_needed``: the far helical rig's wheel
     eccentricity beside a pinion pitch error, 1020 cycles, 575.6 -> 225.5 s at stop 59). A model whose own record
-    repeats every mesh cycle cannot make such a pair (a candidate alone repeats within a wheel revolution), so nothing is checked
-    then (and nothing costs)."""
+    repeats every mesh cycle cannot make such a pair (a candidate alone repeats within a wheel revolution), so
+    nothing is checked then (and nothing costs)."""
     from datagen.effects import get
 
     if prepared_case(ref, model).record.period_cycles <= 1:

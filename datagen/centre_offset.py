@@ -155,9 +155,8 @@ def slots_at_centre_offset(stiffness, dx_m, dy_m, *, subdivisions: int = 1, cycl
     # (the same values, so the same quotients to the bit); 200 columns of a pitted flank made this a fifth of
     # the record's time
     one = shift.size > 1 and bool(np.all(shift == shift[0]))
-    # the same operations as dw / compliance(positions + dg) with the slot after the last appended, on three arrays
-    # of the record's size instead of five (a helical record's are 0.6 GB each over 300 cycles, and fresh pages of
-    # that size cost the kernel about as much time as the arithmetic: bench_long_period, sys 38 s of 81 s)
+    # dw / compliance(positions + dg), the slot after the last appended, on 3 record-size arrays instead of 5 (0.6 GB
+    # each for a helical record of 300 cycles; their fresh pages cost about what the arithmetic does)
     pos = slot_positions(pair, u, slots, shift[:1] if one else shift)
     pos += dg_grid[:, None, None]
     comp = pair_compliance(pair)(pos)
