@@ -29,6 +29,7 @@ import math
 
 import numpy as np
 
+from datagen.centre_banded import _lattice_interp, _scale, banded_pays, banded_record, points_banded
 from gearpit.errors import require
 
 #: record points per grid step of the hook-2c records that :func:`datagen.mesh_excitation.mesh_record` builds
@@ -37,9 +38,10 @@ from gearpit.errors import require
 SUBDIVISIONS = 8
 #: sum unstaggered slices before the rule (slots_at_centre_offset; False: slice by slice, the tests' reference)
 MERGE_UNSTAGGERED = True
-#: a one-slice record's points by the compiled rule (:func:`datagen.compiled_records.points_one_slice`, the same bits),
-#: and :func:`refine_slots` by :func:`datagen.compiled_records.refine_slots_into`; False: the numpy rules
-#: (:func:`_points`, the tests' reference)
+#: the slice stiffnesses by :func:`datagen.compiled_centre.slice_stiffness_into` (the same bits), a staggered pair's
+#: banded rule by :func:`datagen.compiled_centre.points_banded` (the same to rounding), a one-slice record's points by
+#: :func:`datagen.compiled_records.points_one_slice` (the same bits) and :func:`refine_slots` by
+#: :func:`datagen.compiled_records.refine_slots_into`; False: the numpy rules (the tests' reference)
 COMPILED = True
 #: elements (positions x pairs x slices) per block of the vectorised evaluation (bounds the memory)
 _BLOCK_ELEMENTS = 1 << 16
@@ -150,22 +152,33 @@ def slots_at_centre_offset(stiffness, dx_m, dy_m, *, subdivisions: int = 1, cycl
     slots = np.arange(-1, S)                                                        # -1: the early pair
     # slice stiffness in contact at the grid samples (each at its own displacement): (n_grid, S + 1, slices)
     dg_grid = dg[::q]
-    u = (np.arange(dg_grid.size) % ppc) / ppc
     # slices at one shift (a spur pair's pixel columns) have the same positions: their compliance is read once
     # (the same values, so the same quotients to the bit); 200 columns of a pitted flank made this a fifth of
     # the record's time
     one = shift.size > 1 and bool(np.all(shift == shift[0]))
-    # dw / compliance(positions + dg), the slot after the last appended, on 3 record-size arrays instead of 5 (0.6 GB
-    # each for a helical record of 300 cycles; their fresh pages cost about what the arithmetic does)
-    pos = slot_positions(pair, u, slots, shift[:1] if one else shift)
-    pos += dg_grid[:, None, None]
-    comp = pair_compliance(pair)(pos)
-    del pos
-    v = np.empty((comp.shape[0], comp.shape[1] + 1, comp.shape[2]))
-    np.divide(dw, comp, out=v[:, :-1])
-    del comp
-    # the slot after the last: out of contact, any finite value (a copy of the last slot, pits included)
-    v[:, -1] = v[:, -2]
+    sh = np.ascontiguousarray(shift[:1] if one else shift, dtype=float)
+    table = pair_compliance(pair)
+
+    def values(rows):
+        """``dw / compliance(positions + dg)`` at grid samples ``rows``: (rows, S + 2, slices), the slot after
+        the last appended (out of contact, any finite value: a copy of the last slot)."""
+        if COMPILED:        # the same bits, without the position and compliance arrays
+            from datagen.compiled_centre import slice_stiffness_into
+
+            v = np.empty((rows.size, slots.size + 1, sh.size))
+            slice_stiffness_into(ppc, float(pair.contact_start_m), float(pair.base_pitch_m), slots, sh, rows,
+                                 np.ascontiguousarray(dg_grid[rows]), table.g_table_m, table.c_table, float(dw), v)
+            return v
+        # on 3 record-size arrays instead of 5 (their fresh pages cost about what the arithmetic does)
+        pos = slot_positions(pair, (rows % ppc) / ppc, slots, sh)
+        pos += dg_grid[rows][:, None, None]
+        comp = table(pos)
+        del pos
+        v = np.empty((comp.shape[0], comp.shape[1] + 1, comp.shape[2]))
+        np.divide(dw, comp, out=v[:, :-1])
+        del comp
+        v[:, -1] = v[:, -2]
+        return v
     # pitted pairs: scaled by the nominal pitted / healthy ratio at that sample: (rows, column, ratio per slice)
     scaled = []
     if stiffness._overrides:
@@ -185,6 +198,12 @@ def slots_at_centre_offset(stiffness, dx_m, dy_m, *, subdivisions: int = 1, cycl
     d_start = ((start - pair.contact_start_m) - dg) / h
     d_end = -dg / h
     e0, e1 = (np.broadcast_to(np.asarray(e, float), shift.shape) for e in edges)
+    out = np.empty((dx.size, S + 1))
+    if q > 1 and COMPILED and banded_pays(edges[0], shift.size):
+        # a staggered pair: block by block of grid samples, no array of the record's size but ``out``
+        banded_record(out, values, scaled, edges, d_start, d_end, ppc, q, dg_grid.size)
+        return np.concatenate([out[:, 1:], out[:, :1]], axis=1)
+    v = values(np.arange(dg_grid.size))
     if MERGE_UNSTAGGERED and shift.size > 1 and np.all(e0 == e0[0]) and np.all(e1 == e1[0]):
         # unstaggered slices (a spur pair's pixel columns): every weight of the rule is the same on each slice
         # and the rule is linear in the slice values, so their sum goes through it once (to rounding)
@@ -194,9 +213,8 @@ def slots_at_centre_offset(stiffness, dx_m, dy_m, *, subdivisions: int = 1, cycl
         if one and v.shape[2] == 1:
             v = np.repeat(v, shift.size, axis=2)
         _scale(v, scaled)
-    out = np.empty((dx.size, S + 1))
     if q > 1 and banded_pays(edges[0], shift.size):
-        _points_banded(out, v, edges, d_start, d_end, ppc, q)
+        points_banded(out, v, edges, d_start, d_end, ppc, q)
     elif q > 1 and v.shape[2] == 1 and COMPILED:
         from datagen.compiled_records import points_one_slice
         from datagen.stiffness import FRACTION_SNAP
@@ -210,15 +228,6 @@ def slots_at_centre_offset(stiffness, dx_m, dy_m, *, subdivisions: int = 1, cycl
             i = np.arange(r0, min(r0 + block, dx.size))
             out[i] = _points(v, edges, d_start[i], d_end[i], i, ppc, q)
     return np.concatenate([out[:, 1:], out[:, :1]], axis=1)
-
-
-def _scale(v, scaled, r0: int = 0, r1: int | None = None) -> None:
-    """Scale the pitted samples of ``v`` in place: ``scaled`` holds (sorted rows, column, ratio per slice); with
-    ``r0``, ``r1``, ``v`` is the block of rows ``r0 .. r1 - 1``."""
-    for rows, c, ratio in scaled:
-        lo, hi = (0, rows.size) if r1 is None else np.searchsorted(rows, (r0, r1))
-        if hi > lo:
-            v[rows[lo:hi] - r0, c] *= ratio[lo:hi]
 
 
 #: elements (rows x columns x slices) per block of :func:`_slice_sums` (a block stays in the cache)
@@ -245,122 +254,6 @@ def _slice_sums(v, n_slices, scaled):
         _scale(b, scaled, r0, r1)
         out[r0:r1] = b.sum(axis=2, keepdims=True)
     return out
-
-
-#: slices from which :func:`slots_at_centre_offset` may sum a point's slices by contact bands
-#: (:func:`_points_banded`) instead of one by one (:func:`_points`; see :func:`banded_pays`)
-BANDED_MIN_SLICES = 8
-
-
-def banded_pays(start_edges, n_slices: int) -> bool:
-    """Whether summing by contact bands (:func:`_points_banded`) does less work than slice by slice: the slices'
-    contact starts ``start_edges`` (grid steps) must be staggered, so that an edge band (about 3 steps wide)
-    holds few slices: the two bands together at most a quarter of them. A spur pair's slices (a pitted flank
-    has one per pixel column) share their edges: a point near an edge has every slice in its band, and the
-    banded sum measured 5x slower than the slice-by-slice one there (the benchmark sweep's pitted, eccentric
-    spur samples); it keeps the latter, bit for bit."""
-    if n_slices < BANDED_MIN_SLICES:
-        return False
-    e0 = np.asarray(start_edges, float)
-    span = float(e0.max() - e0.min()) if e0.size > 1 else 0.0
-    if span <= 0.0:
-        return False
-    stagger = span / (n_slices - 1)
-    return 2.0 * (3.0 / stagger + 1.0) <= n_slices / 4.0
-#: record points per block of :func:`_points_banded`
-_BANDED_BLOCK_POINTS = 8192
-#: margin (grid steps) of the band bounds: a slice this close to a bound is summed one by one, by the full rule
-_BAND_MARGIN = 1e-9
-
-
-def _points_banded(out, v, edges, d_start, d_end, ppc: int, q: int) -> None:
-    """:func:`_points` on every record point, into ``out``, with the slices summed by bands (same result to
-    rounding; tested against it).
-
-    Why: on a helical pair the slices (100 across the face) make :func:`_points` the cost of a hook-2c record:
-    measured on ``helical-dct`` at 512 positions per cycle, a wheel eccentricity's record over one wheel
-    revolution (245760 points x 5 columns x 100 slices) took 3.2 s of the 3.4 s of its periodic simulation, and
-    the attribution of a 2 s record spent 32-37 s of its pool's time on that candidate.
-
-    How: along a column the slices' nominal contact edges ``edges`` (grid steps from ``A``) rise with the slice's
-    stagger, so at one point the slices of one engagement fall into consecutive runs: out of contact (share 0:
-    either edge factor is 0), inside (both edge factors and both cell shares are 1, so the value is the linear
-    interpolation ``(1 - t) v_a + t v_b``), and the two edge bands between them. The inside run is summed from
-    running sums of ``v`` over the slices (made in place: ``v`` is overwritten); only the edge bands (a few
-    slices each) take :func:`_points`' full rule, on values taken back from the running sums.
-    The run bounds come from the conditions of that rule solved for the slice's edge (``searchsorted``), with a
-    margin of :data:`_BAND_MARGIN` steps: a slice near a bound goes to a band, where the full rule decides."""
-    n_grid, n_cols = v.shape[0], v.shape[1] - 1
-    e0 = np.asarray(edges[0], float)
-    e1 = np.broadcast_to(np.asarray(edges[1], float), e0.shape)
-    order = np.argsort(e0, kind="stable")
-    if not np.array_equal(order, np.arange(e0.size)):
-        e0, e1, v = e0[order], e1[order], v[:, :, order]
-    if np.any(np.diff(e1) < 0):      # the contact length is the same on every slice, so e1 follows e0
-        raise ValueError("slots_at_centre_offset: contact ends not in the order of the contact starts")
-    # the running sums over the slices, in place (``v`` is this call's own array; no second copy of its size):
-    # v[..., s] becomes the sum of slices 0..s, and a slice's own value is the difference of two of them
-    np.cumsum(v, axis=2, out=v)
-    cum = v
-
-    def upto(rows: tuple, k):
-        """Sum of slices ``0 .. k - 1`` at ``rows`` (0 for k = 0)."""
-        return np.where(k > 0, cum[rows + (np.maximum(k - 1, 0),)], 0.0)
-    cols = np.arange(n_cols)
-    for r0 in range(0, out.shape[0], _BANDED_BLOCK_POINTS):
-        i = np.arange(r0, min(r0 + _BANDED_BLOCK_POINTS, out.shape[0]))
-        ia, sub = np.divmod(i, q)
-        c0 = ia % ppc
-        t = (sub / q)[:, None]
-        d_s, d_e = d_start[i][:, None], d_end[i][:, None]
-        j = (c0[:, None] + (cols[None, :] - 1) * ppc).astype(float)                  # (points, cols)
-        fs, fe = np.floor(t - d_s), np.floor(d_e - t)
-        # inside: e0 <= j + 0.5 + min(floor(t - d_s), -d_s) - 1 and e1 >= j + 0.5 + max(-floor(d_e - t), 1 - d_e)
-        hi = np.searchsorted(e0, (j - 0.5 + np.minimum(fs, -d_s) - _BAND_MARGIN).ravel(), side="right")
-        lo = np.searchsorted(e1, (j + 0.5 + np.maximum(-fe, 1.0 - d_e) + _BAND_MARGIN).ravel(), side="left")
-        # out of contact: e0 >= j + 1.5 + floor(t - d_s) (start factor 0) or e1 <= j - 1.5 - floor(d_e - t)
-        end = np.searchsorted(e0, (j + 1.5 + fs + _BAND_MARGIN).ravel(), side="left")
-        beg = np.searchsorted(e1, (j - 1.5 - fe - _BAND_MARGIN).ravel(), side="right")
-        shape = j.shape
-        beg, end = beg.reshape(shape), np.maximum(end.reshape(shape), beg.reshape(shape))
-        lo = np.clip(lo.reshape(shape), beg, end)
-        hi = np.clip(hi.reshape(shape), lo, end)
-        ib = (ia + 1) % n_grid
-        col_b = cols[None, :] + (c0 == ppc - 1)[:, None]
-        ra, rb = (ia[:, None], cols[None, :]), (ib[:, None], col_b)
-        inside_a = upto(ra, hi) - upto(ra, lo)
-        inside_b = upto(rb, hi) - upto(rb, lo)
-        total = (1.0 - t) * inside_a + t * inside_b
-        for start, stop in ((beg, lo), (hi, end)):        # the two edge bands, by the full rule
-            width = int((stop - start).max(initial=0))
-            if width == 0:
-                continue
-            sl = start[:, :, None] + np.arange(width)[None, None, :]
-            valid = sl < stop[:, :, None]
-            sl = np.minimum(sl, e0.size - 1)
-            v_a = upto((ia[:, None, None], cols[None, :, None]), sl + 1) - upto((ia[:, None, None], cols[None, :, None]), sl)
-            v_b = upto((ib[:, None, None], col_b[:, :, None]), sl + 1) - upto((ib[:, None, None], col_b[:, :, None]), sl)
-            total += _band_sum(v_a, v_b, e0[sl], e1[sl], valid, j, t, d_s, d_e)
-        out[i] = total
-
-
-def _band_sum(v_a, v_b, e0, e1, valid, j, t, d_s, d_e):
-    """:func:`_points`' rule on gathered slices (points, cols, k) of each point and column: their grid samples
-    ``v_a``, ``v_b`` and edges ``e0``, ``e1``; slices not ``valid`` add nothing."""
-    from datagen.stiffness import FRACTION_SNAP, cell_share
-
-    x0 = j[:, :, None] - e0 + 0.5
-    y0 = e1 - j[:, :, None] + 0.5
-    t3, d_s3, d_e3 = t[:, :, None], d_s[:, :, None], d_e[:, :, None]
-    share = _lattice_interp(x0, t3 - d_s3) * _lattice_interp(y0, d_e3 - t3)
-    share[share < FRACTION_SNAP] = 0.0
-    share[share > 1.0 - FRACTION_SNAP] = 1.0
-    w_a = (1.0 - t3) * cell_share(x0 - d_s3, y0 + d_e3)
-    w_b = t3 * cell_share(x0 + 1.0 - d_s3, y0 - 1.0 + d_e3)
-    w = w_a + w_b
-    value = np.where(w > 0, (w_a * v_a + w_b * v_b) / np.where(w > 0, w, 1.0), (1.0 - t3) * v_a + t3 * v_b)
-    value = np.where(t3 == 0.0, v_a, value)
-    return np.where(valid, share * value, 0.0).sum(axis=2)
 
 
 def _points(v, edges, d_start, d_end, i, ppc: int, q: int) -> np.ndarray:
@@ -399,15 +292,6 @@ def _points(v, edges, d_start, d_end, i, ppc: int, q: int) -> np.ndarray:
     value = np.where(w > 0, (w_a * v_a + w_b * v_b) / np.where(w > 0, w, 1.0), (1.0 - t) * v_a + t * v_b)
     value = np.where(t == 0.0, v_a, value)
     return (share * value).sum(axis=2)
-
-
-def _lattice_interp(z0, dz):
-    """Linear interpolation of ``clip(z, 0, 1)`` between the lattice points ``z0 + n`` (n integer) around
-    ``z0 + dz``."""
-    n = np.floor(dz)
-    tau = dz - n
-    lo = z0 + n
-    return (1.0 - tau) * np.clip(lo, 0.0, 1.0) + tau * np.clip(lo + 1.0, 0.0, 1.0)
 
 
 def refine_slots(x: np.ndarray, positions_per_cycle: int, subdivisions: int) -> np.ndarray:

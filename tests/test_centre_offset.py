@@ -289,11 +289,11 @@ def test_zero_eccentricity_record_is_the_nominal_as_read():
 @pytest.mark.parametrize("q", [8, 3])
 def test_banded_slice_sums_equal_the_slice_by_slice_rule(ppc, edges, pitted, q):
     """A helical pair's record on subdivided steps sums each point's slices by contact bands
-    (datagen.centre_offset._points_banded: the inside run from prefix sums, the two edge bands by the full
+    (datagen.centre_banded.points_banded: the inside run from prefix sums, the two edge bands by the full
     rule). Reference: the slice-by-slice rule (_points), the same formula on every slice. Tolerance: rounding,
     1e-12 of the largest pair stiffness (measured 1e-15). Displacements: none, sub-step, 30 um and 150 um
     towards the pinion (early entry), turning over the record, so every band case occurs."""
-    import datagen.centre_offset as co
+    import datagen.centre_banded as co
 
     pair = preset("helical-dct")
     ms = mesh_stiffness(pair, pits=_rect_pit(pair) if pitted else None, positions_per_cycle=ppc, edges=edges)
@@ -383,3 +383,70 @@ def test_compiled_refinement_equals_the_numpy_rule_to_the_bit(monkeypatch, ppc, 
     slow = co.refine_slots(x, ppc, q)
     assert fast.shape == slow.shape == (3 * ppc * q, slots + 1)
     assert fast.tobytes() == slow.tobytes()
+
+
+def test_compiled_table_lookup_and_slice_stiffness_give_numpy_bits():
+    """The compiled slice stiffnesses (datagen.compiled_centre.slice_stiffness_into) read the compliance table by
+    index instead of np.interp's binary search: the same IEEE operations, so the same bits. Reference: np.interp on
+    the pair's own table (points on nodes, between them, outside both ends, on the last node) and on a table of
+    uneven steps (the index guess is then wrong and corrected); the slice stiffness against
+    dw / np.interp(slot_positions + dg), slots -1..S-1 of a helical pair with displacements of +/-1 mm."""
+    from datagen.compiled_centre import _interp_uniform, slice_stiffness_into
+    from datagen.compliance import pair_compliance
+    from datagen.stiffness import slot_positions
+
+    pair = preset("helical-dct")
+    table = pair_compliance(pair)
+    g, c = table.g_table_m, table.c_table
+    rng = np.random.default_rng(4)
+    x = np.concatenate([rng.uniform(g[0] - 1e-3, g[-1] + 1e-3, 20000), g, [g[0], g[-1], np.nextafter(g[-1], 0)]])
+    inv = (g.size - 1) / (g[-1] - g[0])
+    assert np.array_equal([_interp_uniform(v, g, c, inv) for v in x], np.interp(x, g, c))
+    g2 = np.sort(rng.uniform(0.0, 1.0, 50))
+    c2 = rng.normal(size=50)
+    x2 = rng.uniform(-0.1, 1.1, 5000)
+    inv2 = (g2.size - 1) / (g2[-1] - g2[0])
+    assert np.array_equal([_interp_uniform(v, g2, c2, inv2) for v in x2], np.interp(x2, g2, c2))
+
+    ms = mesh_stiffness(pair, positions_per_cycle=32)
+    dw, _, shift = face_slices(pair, ms.n_slices)
+    slots = np.arange(-1, ms.n_slots)
+    rows = np.arange(3 * 32)[::-1].copy()
+    dg = rng.uniform(-1e-3, 1e-3, rows.size)
+    v = np.empty((rows.size, slots.size + 1, shift.size))
+    slice_stiffness_into(32, float(pair.contact_start_m), float(pair.base_pitch_m), slots, shift, rows, dg, g, c,
+                         float(dw), v)
+    pos = slot_positions(pair, (rows % 32) / 32, slots, shift)
+    pos += dg[:, None, None]
+    ref = dw / table(pos)
+    assert np.array_equal(v[:, :-1], ref) and np.array_equal(v[:, -1], ref[:, -1])
+    assert np.any(pos < g[0]) and np.any(pos > g[-1]) and np.any((pos > g[0]) & (pos < g[-1]))  # every branch
+
+
+@pytest.mark.parametrize("pitted,edges", [(False, "box"), (True, "box"), (True, "point")])
+def test_compiled_banded_record_block_by_block_equals_the_numpy_rules(monkeypatch, pitted, edges):
+    """A helical pair's moving-centre record, compiled and block by block (datagen.centre_banded.banded_record:
+    the slice values of 37 grid samples at a time, so blocks end inside cycles and the last one wraps to the
+    record's first sample), against the numpy rules on the whole record (COMPILED = False: np.interp, the
+    numpy banded rule). Tolerance: rounding, 1e-12 of the largest pair stiffness (measured: the same bits).
+    A truncated record of a pitted pinion (held cycles 5..9 of its period, so the pitted engagement is found
+    through ``cycles``) with a 60 um eccentricity turning over it and an early entry."""
+    import datagen.centre_offset as co
+
+    pair = preset("helical-dct")
+    ms = mesh_stiffness(pair, pits=_rect_pit(pair, tooth=7) if pitted else None, positions_per_cycle=64,
+                        edges=edges)
+    q, ppc, n = 8, 64, 5
+    th = 2 * np.pi * np.arange(n * ppc * q) / (n * ppc * q) * 0.7
+    dx, dy = 60e-6 * np.cos(th) - 40e-6, 60e-6 * np.sin(th)
+    cycles = np.arange(5, 10)
+    monkeypatch.setattr(co.banded_record, "__defaults__", (37,))
+    fast = co.slots_at_centre_offset(ms, dx, dy, subdivisions=q, cycles=cycles)
+    monkeypatch.setattr(co, "COMPILED", False)
+    slow = co.slots_at_centre_offset(ms, dx, dy, subdivisions=q, cycles=cycles)
+    np.testing.assert_allclose(fast, slow, rtol=0, atol=1e-12 * np.abs(slow).max())
+    assert np.any(slow[:, -1] > 0)                                       # the early pair enters
+    if pitted:       # the pit is in the held cycles: the record differs from the healthy pair's
+        healthy = co.slots_at_centre_offset(mesh_stiffness(pair, positions_per_cycle=64, edges=edges,
+                                                           n_slices=ms.n_slices), dx, dy, subdivisions=q)
+        assert np.abs(healthy.sum(axis=1) - slow.sum(axis=1)).max() > 0.02 * slow.sum(axis=1).max()
