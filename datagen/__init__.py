@@ -12,6 +12,8 @@
 - ``stiffness``  time-varying mesh stiffness over a revolution, slices, pits
 - ``pit_stiffness``  how a pit map changes the compliances of the slices it touches (pit models, section loss)
 - ``centre_offset``  the pair at moving centres (eccentricity, hook 2c), on subdivided grid steps
+- ``centre_banded``  a staggered (helical) pair's slices summed by contact bands at each record point (hook 2c)
+- ``compiled_centre``, ``compiled_records``  the hook-2c records' kernels compiled (numba); the numpy rules are their reference
 - ``lumped_model``     DOFs, mass / stiffness / damping matrices of the drive train (spur 6 DOF, helical 8)
 - ``mesh_excitation``  stiffness + effect deviations -> the periodic mesh record a simulation reads
 - ``newmark``          batched average-acceleration Newmark with the rank-one mesh term (+ Newton)
