@@ -144,6 +144,12 @@ def _calibration_html(cal: dict | None, escalation: dict | None = None) -> list[
                f"{html.escape(rej.get('claimed') or 'no claim')}), above the model as written's "
                f"{rej['as_written_error_db']:.2f} dB, so the calibration was not used: "
                + ", ".join(f"{html.escape(k)} {v:.4g}" for k, v in rej["parameters"].items()) + ".</p>"]
+    for n in (escalation or {}).get("settled", []):      # compare.refit.settle
+        why.append(f"<p>The calibrated pass claimed nothing more, so {html.escape(n['effect'])} was refitted at "
+                   f"its drive train: {html.escape(str(n['before']))} -> {html.escape(str(n['after']))}, error "
+                   f"{n['error_before_db']:.2f} -> {n['error_after_db']:.2f} dB"
+                   + (" (kept: the settled model is written beside the model file)." if n["kept"] else
+                      " (not kept: it lowered the error by less than 10 %).") + "</p>")
     if cal is None:
         return why + ["<p>Nuisance calibration: off (the drive train as the model file gives it).</p>"]
     rows = [[k, _fmt(cal["start"].get(k), 4), _fmt(v, 4), _fmt(cal["sigma"].get(k), 2)]

@@ -415,7 +415,20 @@ SCHEMA = {
                                "required": ["error_db", "as_written_error_db", "parameters"],
                                "properties": {"error_db": _NUM, "as_written_error_db": _NUM,
                                               "claimed": {"type": ["string", "null"]},
-                                              "parameters": {"type": "object"}}}}},
+                                              "parameters": {"type": "object"}}},
+                           "settled": {
+                               "type": "array",
+                               "description": "the calibrated pass claimed nothing more, so each effect of the "
+                                              "model was refitted at the calibrated drive train "
+                                              "(compare.refit.settle): its parameters before and after, the "
+                                              "model's error with each, and whether the refit lowered it enough "
+                                              "to be kept (10 %)",
+                               "items": {"type": "object",
+                                         "required": ["effect", "before", "after", "error_before_db",
+                                                      "error_after_db", "kept"],
+                                         "properties": {"effect": {"type": "string"}, "before": {"type": "object"},
+                                                        "after": {"type": "object"}, "error_before_db": _NUM,
+                                                        "error_after_db": _NUM, "kept": {"type": "boolean"}}}}}},
         "ledger": {"type": "array",
                    "items": {"type": "object", "required": ["run", "model", "error_db"],
                              "properties": {"run": {"type": "integer"}, "model": {"type": "string"},

@@ -144,6 +144,16 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
                         "nuisances were calibrated and the attribution repeated, but that pass ended higher ("
                         f"{rej['error_db']:.2f} dB with " + (rej.get("claimed") or "no claim")
                         + f", against {rej['as_written_error_db']:.2f} dB as written); the model as written is kept")
+    if staged.settled:
+        from compare.refit import refit_message
+
+        messages += ["the calibrated pass claims nothing more; at its drive train " + refit_message(n)
+                     for n in staged.settled]
+        if any(n["kept"] for n in staged.settled):
+            spath = mpath.with_name(mpath.stem + ".settled" + mpath.suffix)
+            staged.settled_model.save(spath)
+            messages.append(f"settled model written: {spath} (the calibrated drive train and the kept refits; "
+                            f"compare with --model {spath} to take it)")
     cal = comparison.calibration
     if cal is not None:
         messages.append("nuisances calibrated: " + ", ".join(f"{k} {v:.4g}" for k, v in cal.values.items())

@@ -1,0 +1,49 @@
+"""The loop settles its model once the calibrated pass claims nothing more (compare.refit.settle): every effect of
+the model refitted at the calibrated drive train. Source: the simulator's truth (the hidden pit's severity)."""
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import pytest
+
+from compare.refit import settle
+
+
+def test_settle_runs_only_after_a_calibrated_pass_that_claims_nothing_on_a_model_with_effects():
+    """The conditions of compare.refit.settle, each broken in turn: the run did not escalate (the model as written
+    is the answer), the calibrated pass claimed an effect (the loop goes on: its next step settles), the model
+    holds no effect (nothing to refit), no attribution. A refit would need a measurement: passing None fails
+    loudly if any of these ran one."""
+    claim = SimpleNamespace(claimed=[object()])
+    none = SimpleNamespace(claimed=[])
+    with_effect = SimpleNamespace(model=SimpleNamespace(effects=(object(),)))
+    bare = SimpleNamespace(model=SimpleNamespace(effects=()))
+    for escalated, att, comp in ((False, none, with_effect), (True, claim, with_effect), (True, none, bare),
+                                 (True, None, with_effect)):
+        staged = SimpleNamespace(escalated=escalated, attribution=att, comparison=comp)
+        assert settle(None, staged) == (None, [])
+    with pytest.raises(Exception):      # all conditions hold: it refits, and a missing measurement fails
+        settle(None, SimpleNamespace(escalated=True, attribution=none, comparison=with_effect))
+
+
+@pytest.mark.slow    # ~3 min: two loop steps on the far helical rig, the second calibrated
+def test_a_pit_claimed_at_the_drive_train_as_written_is_settled_near_its_true_severity():
+    """The helical rig of compare.synthetic.OTHER_RIGS (drive train 2-3 times off the defaults, noise seed 11) with
+    a hidden pit of severity 0.2 on a pinion tooth (the example's tolerance 0.05). Measured at stop 60: the model
+    as written claims it (64 %) at 0.3125, read off an error surface without a minimum at the truth
+    (experiments/drivetrain_landscape.py); with it added the next comparison calibrates, claims nothing more
+    (2.14 dB), and the pit refitted at that drive train is 0.167 (2.14 -> 1.83 dB). Asserted: the loop's first
+    claim is the pit, its second step settles (a kept refit of the pit, the error lowered), and the settled
+    severity is within the example's tolerance of the truth."""
+    from compare.synthetic import HIDDEN_EXAMPLES, OTHER_RIGS, compare_loop, hidden_effect_measurement
+
+    base, less = OTHER_RIGS["helical"]
+    ex = HIDDEN_EXAMPLES["tooth_pit"]
+    m, ex = hidden_effect_measurement("tooth_pit", seed=11, **{**base, "snr_db": ex.snr_db - less})
+    ledger, model, final = compare_loop(m, ex.model(), steps=2)
+    assert ledger[0]["claimed"] == "tooth_pit", ledger[0]["candidates"]
+    assert ledger[1]["claimed"] is None and ledger[1]["escalated"], ledger[1]
+    (note,) = [n for n in ledger[1]["settled"] if n["effect"] == "tooth_pit"]
+    assert note["kept"] and note["error_after_db"] < note["error_before_db"], note
+    pit = next(e for e in model.effects if e.name == "tooth_pit")
+    assert abs(pit.params()["severity"] - 0.2) <= 0.05, (pit.params(), ledger[0]["claimed_params"])
