@@ -47,3 +47,26 @@ def test_a_pit_claimed_at_the_drive_train_as_written_is_settled_near_its_true_se
     assert note["kept"] and note["error_after_db"] < note["error_before_db"], note
     pit = next(e for e in model.effects if e.name == "tooth_pit")
     assert abs(pit.params()["severity"] - 0.2) <= 0.05, (pit.params(), ledger[0]["claimed_params"])
+
+
+def test_settled_refits_are_in_the_json_escalation_entry_and_validate_against_the_schema():
+    """Staged.summary() (the JSON document's ``escalation`` entry) carries the settling's notes; the schema
+    (compare.schema.SCHEMA) must accept them and must reject an entry that lacks a required field."""
+    import jsonschema
+
+    from compare.escalation import Staged
+    from compare.schema import SCHEMA
+
+    best = SimpleNamespace(effect="tooth_pit", reduction=0.64, claimed=True)
+    first = (SimpleNamespace(error_db={"total": 4.12}), SimpleNamespace(candidates=[best]))
+    note = {"effect": "tooth_pit", "before": {"severity": 0.3125}, "after": {"severity": 0.167},
+            "error_before_db": 2.14, "error_after_db": 1.83, "kept": True, "held_by": {}}
+    staged = Staged(comparison=None, attribution=SimpleNamespace(candidates=[]), as_written=first, mode="auto",
+                    reason="unexplained", settled=[note])
+    entry = staged.summary()
+    assert entry["settled"] == [{k: v for k, v in note.items() if k != "held_by"}]
+    schema = SCHEMA["properties"]["escalation"]
+    jsonschema.validate(entry, schema)
+    del entry["settled"][0]["kept"]
+    with pytest.raises(jsonschema.ValidationError):
+        jsonschema.validate(entry, schema)
