@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from datagen.compiled_records import _clip01, _lattice_interp_1, _snap
+from datagen.compiled_records import point_rule
 
 
 @njit(cache=True)
@@ -107,19 +107,7 @@ def _band(cum, ia, ib, col, col_b, start, stop, e0, e1, j, t, d_s, d_e, snap):
     for sl in range(start, stop):
         v_a = _upto(cum, ia, col, sl + 1) - _upto(cum, ia, col, sl)
         v_b = _upto(cum, ib, col_b, sl + 1) - _upto(cum, ib, col_b, sl)
-        x0 = j - e0[sl] + 0.5
-        y0 = e1[sl] - j + 0.5
-        share = _snap(_lattice_interp_1(x0, t - d_s) * _lattice_interp_1(y0, d_e - t), snap)
-        w_a = (1.0 - t) * _snap(_clip01(x0 - d_s) * _clip01(y0 + d_e), snap)
-        w_b = t * _snap(_clip01(x0 + 1.0 - d_s) * _clip01(y0 - 1.0 + d_e), snap)
-        w = w_a + w_b
-        if t == 0.0:
-            value = v_a
-        elif w > 0:
-            value = (w_a * v_a + w_b * v_b) / w
-        else:
-            value = (1.0 - t) * v_a + t * v_b
-        total += share * value
+        total += point_rule(v_a, v_b, j - e0[sl] + 0.5, e1[sl] - j + 0.5, t, d_s, d_e, snap)
     return total
 
 

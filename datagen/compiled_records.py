@@ -33,6 +33,25 @@ def _lattice_interp_1(z0, dz):
 
 
 @njit(cache=True)
+def point_rule(v_a, v_b, x0, y0, t, d_s, d_e, snap):
+    """:func:`datagen.centre_offset._points`' rule for one slice of one pair at one record point: its share in
+    contact times its value, from the grid samples ``v_a``, ``v_b`` around the point, the nominal distances
+    ``x0``, ``y0`` (steps, plus 1/2) from the contact's start to sample a's cell end and from sample a's cell
+    start to the contact's end, the point's place ``t`` between the samples and the edges' displacements."""
+    share = _snap(_lattice_interp_1(x0, t - d_s) * _lattice_interp_1(y0, d_e - t), snap)
+    w_a = (1.0 - t) * _snap(_clip01(x0 - d_s) * _clip01(y0 + d_e), snap)
+    w_b = t * _snap(_clip01(x0 + 1.0 - d_s) * _clip01(y0 - 1.0 + d_e), snap)
+    w = w_a + w_b
+    if t == 0.0:
+        value = v_a
+    elif w > 0:
+        value = (w_a * v_a + w_b * v_b) / w
+    else:
+        value = (1.0 - t) * v_a + t * v_b
+    return share * value
+
+
+@njit(cache=True)
 def points_one_slice(v, e0, e1, d_start, d_end, i0, i1, ppc, q, snap, out):
     """:func:`datagen.centre_offset._points` for ``q > 1`` on a record of one slice (the unstaggered slices summed): rows ``i0 .. i1 - 1``
     of ``out``, the same IEEE operations in the same order, point by point (no temporaries: the numpy rule's
@@ -49,21 +68,8 @@ def points_one_slice(v, e0, e1, d_start, d_end, i0, i1, ppc, q, snap, out):
         nxt = 1 if c0 == ppc - 1 else 0
         for col in range(n_cols):
             j = float(c0 + (col - 1) * ppc)
-            x0 = j - e0 + 0.5
-            y0 = e1 - j + 0.5
-            v_a = v[ia, col, 0]
-            share = _snap(_lattice_interp_1(x0, t - d_s) * _lattice_interp_1(y0, d_e - t), snap)
-            v_b = v[ib, col + nxt, 0]
-            w_a = (1.0 - t) * _snap(_clip01(x0 - d_s) * _clip01(y0 + d_e), snap)
-            w_b = t * _snap(_clip01(x0 + 1.0 - d_s) * _clip01(y0 - 1.0 + d_e), snap)
-            w = w_a + w_b
-            if t == 0.0:
-                value = v_a
-            elif w > 0:
-                value = (w_a * v_a + w_b * v_b) / w
-            else:
-                value = (1.0 - t) * v_a + t * v_b
-            out[i, col] = share * value
+            out[i, col] = point_rule(v[ia, col, 0], v[ib, col + nxt, 0], j - e0 + 0.5, e1 - j + 0.5, t, d_s, d_e,
+                                     snap)
 
 
 @njit(cache=True)
