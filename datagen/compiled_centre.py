@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from datagen.compiled_records import point_rule
+from datagen.compiled_records import point_place, point_rule
 
 
 @njit(cache=True)
@@ -122,10 +122,7 @@ def points_banded(cum, r0, e0, e1, d_start, d_end, ppc, q, snap, margin, out, i0
     samples; the bands take the full rule."""
     n_cols = cum.shape[1] - 1
     for i in range(i0, i1):
-        ia = i // q
-        sub = i - ia * q
-        c0 = ia % ppc
-        t = sub / q
+        ia, c0, t = point_place(i, q, ppc)
         d_s = d_start[i]
         d_e = d_end[i]
         fs = np.floor(t - d_s)

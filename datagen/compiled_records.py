@@ -33,6 +33,14 @@ def _lattice_interp_1(z0, dz):
 
 
 @njit(cache=True)
+def point_place(i, q, ppc):
+    """Record point ``i`` on ``q`` points per grid step: the grid sample below it, that sample's position in its
+    mesh cycle (``ppc`` positions) and the point's fraction of the step past it."""
+    ia = i // q
+    return ia, ia % ppc, (i - ia * q) / q
+
+
+@njit(cache=True)
 def point_rule(v_a, v_b, x0, y0, t, d_s, d_e, snap):
     """:func:`datagen.centre_offset._points`' rule for one slice of one pair at one record point: its share in
     contact times its value, from the grid samples ``v_a``, ``v_b`` around the point, the nominal distances
@@ -58,10 +66,7 @@ def points_one_slice(v, e0, e1, d_start, d_end, i0, i1, ppc, q, snap, out):
     ~40 array operations on (points, columns, 1) arrays were a sixth of a hook-2c record's generation)."""
     n_grid, n_cols = v.shape[0], v.shape[1] - 1
     for i in range(i0, i1):
-        ia = i // q
-        sub = i - ia * q
-        c0 = ia % ppc
-        t = sub / q
+        ia, c0, t = point_place(i, q, ppc)
         d_s = d_start[i]
         d_e = d_end[i]
         ib = (ia + 1) % n_grid
