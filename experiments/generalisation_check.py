@@ -18,7 +18,9 @@ nothing.
 Printed per effect: the error before and after (excess over the noise error, dB), the best candidate and its
 reduction, whether it was claimed, the fitted parameter against the truth (the examples' tolerances), and the
 three checks of the slow tests (ranks first and claimed, or "tie": a rival of the claimed effect; error at most
-half; the hidden effect's own fit within tolerance).
+half; the hidden effect's own fit within tolerance). With ``--settle`` each claimed row also runs the loop's
+next step (the claim added, compared and attributed again) and prints whether it settles the model
+(:func:`compare.refit.settle`) and the hidden effect's settled fit; the verdict stays the first claim's.
 """
 from __future__ import annotations
 
@@ -37,17 +39,38 @@ RIGS = OTHER_RIGS
 OTHER_RIG, SNR_LESS_DB = OTHER_RIGS["helical"]
 
 
-def row(name: str, calibrate, seed: int, rig_name: str = "helical") -> dict:
+def row(name: str, calibrate, seed: int, rig_name: str = "helical", settle: bool = False) -> dict:
     t0 = time.perf_counter()
     ex = HIDDEN_EXAMPLES[name]
     base, less_db = RIGS[rig_name]
     rig = {**base, "snr_db": ex.snr_db - less_db}
     ex, c0, a, c1 = run_hidden_case(name, calibrate=calibrate, seed=seed, rig=rig)
     claimed = next((c.effect for c in a.candidates if c.claimed), None)
-    return {"effect": name, **case_checks(name, ex, c0, a, c1), "claimed_effect": claimed,
-            "calibrated": dict(c0.calibration.values) if c0.calibration is not None else None,
-            "escalated_or_calibrated": c0.calibration is not None,
-            "seconds": time.perf_counter() - t0}
+    out = {"effect": name, **case_checks(name, ex, c0, a, c1), "claimed_effect": claimed,
+           "calibrated": dict(c0.calibration.values) if c0.calibration is not None else None,
+           "escalated_or_calibrated": c0.calibration is not None}
+    if settle and claimed is not None:
+        out["settled"] = settled_fit(name, ex, a, rig, seed)
+    out["seconds"] = time.perf_counter() - t0
+    return out
+
+
+def settled_fit(name: str, ex, attribution, rig: dict, seed: int) -> dict:
+    """The loop's next step (``--settle``): the claimed effect added as ``gearpit compare --add`` adds it, compared
+    and attributed again; when that pass calibrates and claims nothing more it settles the model
+    (:func:`compare.refit.settle`), and the hidden effect's settled parameter is checked against the example's
+    tolerance. Returns what the step did and, when the hidden effect was settled, the check."""
+    from compare.escalation import compare_and_attribute
+    from compare.synthetic import check_fit, hidden_effect_measurement, with_candidate
+
+    m, _ = hidden_effect_measurement(name, seed=seed, **rig)
+    st = compare_and_attribute(m, with_candidate(ex.model(), attribution.claimed[0]))
+    res = {"escalated": st.escalated, "claimed": [c.effect for c in st.attribution.claimed],
+           "notes": [{k: n[k] for k in ("effect", "before", "after", "kept")} for n in st.settled]}
+    kept = [n for n in st.settled if n["kept"] and n["effect"] == name]
+    if kept and ex.check is not None:
+        res["fit_ok"], res["fit"] = check_fit(ex, kept[0]["after"])
+    return res
 
 
 def main(argv=None) -> int:
@@ -58,6 +81,9 @@ def main(argv=None) -> int:
     ap.add_argument("--only", nargs="+", default=None, help="these hidden effects only")
     ap.add_argument("--seed", type=int, default=11, help="the rig's noise draw")
     ap.add_argument("--rig", choices=sorted(RIGS), default="helical", help="which other rig (module constants)")
+    ap.add_argument("--settle", action="store_true",
+                    help="also run the loop's next step with the claim added and report whether it settles the "
+                         "model (compare.refit.settle) and the hidden effect's settled fit")
     args = ap.parse_args(argv)
     names = args.only or sorted(HIDDEN_EXAMPLES)
     rows = []
@@ -65,12 +91,17 @@ def main(argv=None) -> int:
           "| fitted vs true | all checks pass |")
     print("|---|---|---|---|---|---|---|---|")
     for n in names:
-        r = row(n, args.calibrate, args.seed, args.rig)
+        r = row(n, args.calibrate, args.seed, args.rig, args.settle)
         rows.append(r)
         rivals = f" (rivals: {', '.join(r['rivals'])})" if r["rivals"] else ""
         print(f"| {n} | {r['error_before_db']:.2f} | {r['best']}, {100 * r['reduction']:.1f} % | "
               f"{r['claimed_effect'] or '-'}{rivals} | {r['error_after_db']:.2f} | {r['ratio']:.2f} | {r['fit']} "
               f"| {verdict(r)} |", flush=True)
+        if "settled" in r:
+            st = r["settled"]
+            print(f"|   next step: {'calibrated' if st['escalated'] else 'as written'}, claims "
+                  f"{', '.join(st['claimed']) or 'nothing'}; settled: {st.get('fit', 'no refit of it kept')} | "
+                  "| | | | | | |", flush=True)
     passed = sum(verdict(r) == "yes" for r in rows)
     print(json.dumps({"rig": RIGS[args.rig][0], "snr_less_db": RIGS[args.rig][1], "calibrate": args.calibrate, "seed": args.seed,
                       "passed": passed, "tied": sum(verdict(r) == "tie" for r in rows), "of": len(rows),
