@@ -137,7 +137,7 @@ class Staged:
     #: why "auto" calibrated (:func:`escalation_reason`: "unexplained" or "unbounded"); None when it did not
     reason: str | None = None
     #: the calibrated pass claimed nothing more, so the model's effects were refitted at its drive train
-    #: (:func:`compare.refit.settle`): the refits' notes, and the calibrated model with the kept ones (else None)
+    #: (:func:`compare.refit.settle`): the refits' notes, and the calibrated model with the kept ones (None: none kept)
     settled: list = field(default_factory=list)
     settled_model: object = None
 

@@ -110,14 +110,15 @@ def settle(measurement, staged, *, reference=None, settings=None, parallel: bool
     went to grade 6.83 for 8; that loop's calibrations are rejected by the ending rule, so it does not settle).
     Each refit is kept only if it lowers the error by :data:`MIN_GAIN`, as every refit.
 
-    Returns ``(model, notes)``: the calibrated model with the kept refits and :func:`refit_effects`' notes, or
-    ``(None, [])`` when the conditions do not hold.
+    Returns ``(model, notes)``: the calibrated model with the kept refits (None when no refit was kept) and
+    :func:`refit_effects`' notes; ``(None, [])`` when the conditions do not hold.
     """
     a = staged.attribution
     model = staged.comparison.model
     if not staged.escalated or a is None or a.claimed or not model.effects:
         return None, []
-    return refit_effects(measurement, model, reference=reference, settings=settings, parallel=parallel)
+    model, notes = refit_effects(measurement, model, reference=reference, settings=settings, parallel=parallel)
+    return (model if any(n["kept"] for n in notes) else None), notes
 
 
 def refit_message(note: dict) -> str:

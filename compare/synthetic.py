@@ -289,7 +289,7 @@ def compare_loop(m, model=None, *, steps: int = 3, refit: bool = True, log=lambd
         for x in row["candidates"]:
             log(f"    {x['effect']:22s} reduction {x['reduction']:6.3f}{'  claimed' if x['claimed'] else ''}")
         if claimed is None:
-            if any(n["kept"] for n in st.settled):      # compare.refit.settle: the model settled at its calibration
+            if st.settled_model is not None:      # compare.refit.settle: the model settled at its calibration
                 model = st.settled_model
                 row["settled"] = st.settled
                 for r in st.settled:

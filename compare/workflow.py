@@ -149,7 +149,7 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
 
         messages += ["the calibrated pass claims nothing more; at its drive train " + refit_message(n)
                      for n in staged.settled]
-        if any(n["kept"] for n in staged.settled):
+        if staged.settled_model is not None:
             spath = mpath.with_name(mpath.stem + ".settled" + mpath.suffix)
             staged.settled_model.save(spath)
             messages.append(f"settled model written: {spath} (the calibrated drive train and the kept refits; "
