@@ -7,15 +7,17 @@ by :func:`compare.measurement.load_measurement`.
 
 Generic layouts
 ---------------
-- CSV/TXT: optional header line (non-numeric first line), delimiter ``,`` ``;``
-  tab or whitespace; a column named ``time``, ``time_s``, ``t`` (or the sidecar's
-  ``time_column``) is the time axis: fs = 1/median(dt), refused unless uniform to 1 %.
+- CSV/TXT: :mod:`compare.text_records` (header, delimiter, comment lines, a decimal
+  comma, a byte-order mark, a time column in s/ms/us).
 - NPY: a 1-D array (one channel) or 2-D (the longer axis is time).
 - NPZ: one 2-D array, or several equal-length 1-D arrays (one channel each, named by
   key); a scalar ``fs_hz`` or ``fs`` entry gives the sampling rate.
 - WAV: :func:`scipy.io.wavfile.read` (integer samples scaled to [-1, 1)).
 - MAT: :func:`scipy.io.loadmat`; v7.3 files (HDF5) through ``h5py``. Numeric
   variables as in NPZ; a scalar ``fs``, ``fs_hz`` or ``Fs`` gives the sampling rate.
+- NPZ and MAT alike: structs (MATLAB structs, HDF5 groups) are flattened, each variable
+  named by its own name unless another has it too (then its dotted path, ``run1.acc``);
+  a uniform ``time``/``t`` vector (``time_ms`` ...) gives the rate and is no channel.
 
 Public layouts (``format`` in the sidecar, or recognised by the file name)
 -------------------------------------------------------------------------
@@ -35,20 +37,18 @@ References
 """
 from __future__ import annotations
 
-import csv
-import io
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from compare.text_records import read_table, seconds_per_unit, times_to_fs
 from gearpit.errors import InputError, require
 
 #: accepted values of the sidecar's ``format``
 FORMATS = ("auto", "csv", "npy", "npz", "wav", "mat", "mcc5_thu", "phm2023", "seu")
 
-TIME_COLUMNS = ("time", "time_s", "t", "times", "time_sec")
 FS_KEYS = ("fs_hz", "fs", "Fs", "FS", "sample_rate", "sampling_rate")
 
 MCC5_COLUMNS = ("speed", "torque", "motor_vibration_x", "motor_vibration_y", "motor_vibration_z",
@@ -134,106 +134,9 @@ def read_record(path: str | Path, fmt: str = "auto", *, time_column: str | None 
 
 
 # ---------------------------------------------------------------------- text
-def _is_number(s: str) -> bool:
-    try:
-        float(s)
-        return True
-    except ValueError:
-        return False
-
-
-def _split(line: str, delim: str | None) -> list[str]:
-    parts = line.split(delim) if delim else line.split()
-    return [s.strip() for s in parts]
-
-
-def _sniff_delimiter(line: str) -> str | None:
-    for d in (",", ";", "\t"):
-        if d in line:
-            return d
-    return None  # whitespace
-
-
-def _parse_rows(lines: list[str], delim: str | None, where: str, first_line_no: int) -> np.ndarray:
-    rows = []
-    width = None
-    for i, line in enumerate(lines):
-        if not line.strip():
-            continue
-        cells = [c for c in _split(line, delim)]
-        while cells and cells[-1] == "":  # trailing separator
-            cells.pop()
-        if width is None:
-            width = len(cells)
-        if len(cells) != width:
-            raise InputError(f"{where}: line {first_line_no + i}", len(cells),
-                             f"{width} columns, as in the first data line")
-        try:
-            rows.append([float(c) if c.lower() not in ("nan", "") else np.nan for c in cells])
-        except ValueError:
-            raise InputError(f"{where}: line {first_line_no + i}", line.strip()[:60], "numbers only") from None
-    require(rows, where, "no data rows", "at least one row of numbers")
-    return np.asarray(rows, dtype=float)
-
-
 def read_delimited(path: Path, *, time_column: str | None = None, skip_text_lines: bool = False) -> RawRecord:
-    """Generic CSV/TXT (module docstring); ``skip_text_lines`` drops leading non-numeric lines."""
-    text = path.read_text(encoding="utf-8", errors="replace")
-    lines = text.splitlines()
-    start = 0
-    while start < len(lines) and not lines[start].strip():
-        start += 1
-    require(start < len(lines), str(path), "empty file", "a file with rows of numbers")
-    header = None
-    if skip_text_lines:
-        while start < len(lines):
-            cells = _split(lines[start], _sniff_delimiter(lines[start]))
-            cells = [c for c in cells if c]
-            if cells and all(_is_number(c) for c in cells) and len(cells) >= 2:
-                break
-            start += 1
-        require(start < len(lines), str(path), "no numeric rows", "rows of numbers after the header text")
-    else:
-        delim = _sniff_delimiter(lines[start])
-        first = [c for c in _split(lines[start], delim)]
-        if not all(_is_number(c) or c.lower() == "nan" for c in first if c):
-            header = [c.strip().strip('"') for c in next(csv.reader(io.StringIO(lines[start]),
-                                                                     delimiter=delim or " ", skipinitialspace=True))]
-            header = [h for h in header if h != ""]
-            start += 1
-    delim = _sniff_delimiter(lines[start]) if start < len(lines) else None
-    try:  # numpy's C parser first (fast on 10^6 rows); ours for a precise message or ragged trailing separators
-        data = np.loadtxt(io.StringIO("\n".join(lines[start:])), delimiter=delim, ndmin=2, dtype=float)
-        if data.size == 0:
-            raise ValueError("no rows")
-    except ValueError:
-        data = _parse_rows(lines[start:], delim, str(path), start + 1)
-    if header is not None:
-        require(len(header) == data.shape[1], f"{path}: header", len(header),
-                f"{data.shape[1]} names, one per data column")
-        names = tuple(header)
-    else:
-        names = tuple(f"ch{i}" for i in range(data.shape[1]))
-    fs = None
-    lower = [n.lower() for n in names]
-    tcol = None
-    if time_column is not None:
-        require(time_column in names, "time_column", time_column, "a column name: " + ", ".join(names))
-        tcol = names.index(time_column)
-    else:
-        tcol = next((i for i, n in enumerate(lower) if n in TIME_COLUMNS), None)
-    if tcol is not None:
-        t = data[:, tcol]
-        require(t.size >= 3 and bool(np.all(np.isfinite(t))), f"{path}: column {names[tcol]}", "non-finite",
-                "finite times")
-        dt = np.diff(t)
-        med = float(np.median(dt))
-        require(med > 0 and float(np.max(np.abs(dt - med))) <= 0.01 * med, f"{path}: column {names[tcol]}",
-                "non-uniform or decreasing times", "uniform sampling (every step within 1 % of the median)")
-        fs = 1.0 / med
-        data = np.delete(data, tcol, axis=1)
-        names = names[:tcol] + names[tcol + 1:]
-    return RawRecord(names, data, fs)
+    """Generic CSV/TXT (:mod:`compare.text_records`); ``skip_text_lines`` drops leading non-numeric lines."""
+    return RawRecord(*read_table(path, time_column=time_column, skip_text_lines=skip_text_lines))
 
 
 def _mcc5_name_hints(name: str) -> dict:
@@ -296,11 +199,41 @@ def _scalar_fs(mapping: dict) -> float | None:
     return None
 
 
+def _flatten(mapping: dict, prefix: str = "") -> dict:
+    """Nested structs (a MAT struct, an HDF5 group) as one level: ``{"data.acc": ...}``; numeric leaves only."""
+    out = {}
+    for k, v in mapping.items():
+        if k.startswith("__"):
+            continue
+        if isinstance(v, dict):
+            out.update(_flatten(v, f"{prefix}{k}."))
+            continue
+        try:
+            a = np.asarray(v)
+        except (ValueError, TypeError):     # ragged cell arrays
+            continue
+        if a.dtype.kind in "fiu":
+            out[prefix + k] = a
+    return out
+
+
 def _from_mapping(mapping: dict, variable: str | None, where: str) -> RawRecord:
-    fs = _scalar_fs(mapping)
-    arrays = {k: np.asarray(v) for k, v in mapping.items()
-              if k not in FS_KEYS and not k.startswith("__") and np.asarray(v).dtype.kind in "fiu"
-              and np.asarray(v).size > 1}
+    """Numeric variables of an NPZ/MAT file; nested structs flattened (a variable keeps its own name when no other
+    leaf has it, else its dotted path); a scalar ``fs`` or a uniform ``time``/``t`` vector gives the rate."""
+    flat = _flatten(mapping)
+    leaf = [k.rsplit(".", 1)[-1] for k in flat]
+    named = {(lf if leaf.count(lf) == 1 else k): v for k, lf, v in zip(flat, leaf, flat.values())}
+    fs = _scalar_fs(named)
+    arrays = {k: v for k, v in named.items() if k not in FS_KEYS and v.size > 1}
+    times = [k for k, v in arrays.items() if seconds_per_unit(k.rsplit(".", 1)[-1]) is not None
+             and np.squeeze(v).ndim == 1 and k != variable]
+    if len(times) == 1:
+        t = arrays.pop(times[0])
+        fs_t = times_to_fs(np.squeeze(t) * seconds_per_unit(times[0].rsplit(".", 1)[-1]), f"{where}:{times[0]}")
+        if fs is not None:
+            require(abs(fs_t - fs) <= 0.01 * fs, f"{where}:{times[0]}", f"a rate of {fs_t:.6g} Hz",
+                    f"the file's fs ({fs:.6g} Hz) within 1 %")
+        fs = fs if fs is not None else fs_t
     if variable is not None:
         require(variable in arrays, "variable", variable, "one of: " + ", ".join(sorted(arrays)))
         rec = _from_array(arrays[variable], None, f"{where}:{variable}")
@@ -339,7 +272,7 @@ def read_mat(path: Path, variable: str | None = None) -> RawRecord:
     import scipy.io
 
     try:
-        mapping = scipy.io.loadmat(path)
+        mapping = scipy.io.loadmat(path, simplify_cells=True)
     except (NotImplementedError, ValueError) as exc:  # v7.3 is HDF5 (NotImplementedError from scipy)
         mapping = _read_hdf5_mat(path, exc)
     return _from_mapping(mapping, variable, str(path))
@@ -352,9 +285,16 @@ def _read_hdf5_mat(path: Path, exc: Exception) -> dict:
         raise InputError("measurement", str(path), "a MAT v7.3 file needs h5py (pip install h5py)") from None
     if not h5py.is_hdf5(path):
         raise InputError("measurement", str(path), f"a readable MAT file ({exc})") from None
-    mapping = {}
     with h5py.File(path, "r") as f:
-        for k, v in f.items():
-            if isinstance(v, h5py.Dataset) and v.dtype.kind in "fiu":
-                mapping[k] = np.asarray(v[()]).T  # MATLAB stores column-major
-    return mapping
+        return _hdf5_group(f, h5py)
+
+
+def _hdf5_group(group, h5py) -> dict:
+    """A MAT v7.3 group (the file, a struct) as nested dicts of its numeric datasets."""
+    out = {}
+    for k, v in group.items():
+        if isinstance(v, h5py.Group) and not k.startswith("#"):
+            out[k] = _hdf5_group(v, h5py)
+        elif isinstance(v, h5py.Dataset) and v.dtype.kind in "fiu":
+            out[k] = np.asarray(v[()]).T  # MATLAB stores column-major
+    return out

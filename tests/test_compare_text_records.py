@@ -1,0 +1,127 @@
+"""Measurement files as loggers, spreadsheets and MATLAB write them (compare.text_records, compare.formats): each
+file is written here from known samples, read back, and compared with them value for value; the rate must be
+the one the file states."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from compare.formats import read_record
+from gearpit.errors import InputError
+
+FS = 8000.0
+
+
+def _signal(n=400):
+    t = np.arange(n) / FS
+    rng = np.random.default_rng(3)
+    return t, np.round(np.sin(2 * np.pi * 310.0 * t) + 0.1 * rng.standard_normal(n), 6), np.round(
+        rng.standard_normal(n), 6)
+
+
+def _rows(cols, sep, fmt="{:.6f}", comma=False):
+    out = []
+    for row in zip(*cols):
+        cells = [fmt.format(v) for v in row]
+        out.append(sep.join(c.replace(".", ",") if comma else c for c in cells))
+    return out
+
+
+def test_a_spreadsheet_export_with_a_byte_order_mark_keeps_its_time_column(tmp_path):
+    """Excel's "CSV UTF-8" starts with a byte-order mark; before, the first header read '\\ufefftime_s', so the
+    time column became a channel and the rate was lost."""
+    t, a, b = _signal()
+    p = tmp_path / "bom.csv"
+    p.write_text("\ufefftime_s,acc,tacho\n" + "\n".join(_rows((t, a, b), ",", "{:.8f}")) + "\n", encoding="utf-8")
+    rec = read_record(p)
+    assert rec.names == ("acc", "tacho")
+    assert rec.fs_hz == pytest.approx(FS, rel=1e-9)
+    np.testing.assert_allclose(rec.data, np.column_stack([a, b]), atol=1e-12)
+
+
+@pytest.mark.parametrize("sep", [";", "\t", " "])
+def test_a_decimal_comma_export_is_read_as_decimal_points(tmp_path, sep):
+    """German/French locale exports: '0,125;-3,5' (and tab- or space-separated); the comma is the decimal mark
+    whenever it is not the delimiter."""
+    t, a, b = _signal()
+    p = tmp_path / "de.csv"
+    p.write_text(sep.join(["time_ms", "Beschl", "Tacho"]) + "\n"
+                 + "\n".join(_rows((t * 1e3, a, b), sep, "{:.6f}", comma=True)) + "\n")
+    rec = read_record(p)
+    assert rec.names == ("Beschl", "Tacho") and rec.fs_hz == pytest.approx(FS, rel=1e-6)
+    np.testing.assert_allclose(rec.data, np.column_stack([a, b]), atol=1e-12)
+
+
+def test_a_loggers_comment_preamble_and_comment_lines_among_the_rows_are_skipped(tmp_path):
+    t, a, b = _signal()
+    rows = _rows((a, b), ",")
+    rows.insert(100, "# channel 2 re-ranged")
+    p = tmp_path / "logger.csv"
+    p.write_text("% rig 3, 2026-12-04\n# fs = 8000 Hz\n// units: m/s^2, V\nacc,tacho\n" + "\n".join(rows) + "\n")
+    rec = read_record(p)
+    assert rec.names == ("acc", "tacho") and rec.data.shape == (400, 2)
+    np.testing.assert_allclose(rec.data, np.column_stack([a, b]), atol=1e-12)
+
+
+@pytest.mark.parametrize("name,scale", [("time_ms", 1e3), ("Time [ms]", 1e3), ("t (us)", 1e6), ("time/s", 1.0),
+                                        ("Time", 1.0)])
+def test_a_time_column_in_its_named_unit_gives_the_rate_in_hz(tmp_path, name, scale):
+    """A time column whose name carries its unit is converted to seconds at the file boundary: 'time_ms' read
+    as seconds would give 8 MHz."""
+    t, a, _ = _signal()
+    p = tmp_path / "t.csv"
+    p.write_text(f"{name},acc\n" + "\n".join(_rows((t * scale, a), ",", "{:.9g}")) + "\n")
+    rec = read_record(p)
+    assert rec.names == ("acc",)
+    assert rec.fs_hz == pytest.approx(FS, rel=1e-6)
+
+
+def test_a_unit_row_under_the_header_is_refused_with_its_line(tmp_path):
+    """Not guessed at: a second header row of units is named in the error (line 2)."""
+    t, a, _ = _signal()
+    p = tmp_path / "units.csv"
+    p.write_text("time,acc\ns,m/s^2\n" + "\n".join(_rows((t, a), ",")) + "\n")
+    with pytest.raises(InputError, match="line 2"):
+        read_record(p)
+
+
+def test_a_matlab_struct_is_flattened_and_its_fs_found(tmp_path):
+    """save('rec.mat', 'data') with data.acc, data.tacho, data.fs; and two runs with the same field names, which
+    keep their dotted paths."""
+    import scipy.io as sio
+
+    _, a, b = _signal()
+    p = tmp_path / "struct.mat"
+    sio.savemat(p, {"data": {"acc": a, "tacho": b, "fs": FS}})
+    rec = read_record(p)
+    assert rec.names == ("acc", "tacho") and rec.fs_hz == FS
+    np.testing.assert_array_equal(rec.data, np.column_stack([a, b]))
+    p2 = tmp_path / "runs.mat"
+    sio.savemat(p2, {"run1": {"acc": a}, "run2": {"acc": b}, "Fs": FS})
+    rec = read_record(p2)
+    assert rec.names == ("run1.acc", "run2.acc") and rec.fs_hz == FS
+    np.testing.assert_array_equal(rec.data, np.column_stack([a, b]))
+    assert read_record(p2, variable="run2.acc").data[:, 0].tolist() == b.tolist()
+
+
+def test_a_time_vector_in_a_mat_file_gives_the_rate_and_is_no_channel_and_must_agree_with_fs(tmp_path):
+    import h5py
+    import scipy.io as sio
+
+    t, a, b = _signal()
+    p = tmp_path / "v5.mat"
+    sio.savemat(p, {"acc": a, "tacho": b, "t": t})
+    rec = read_record(p)
+    assert rec.names == ("acc", "tacho") and rec.fs_hz == pytest.approx(FS, rel=1e-9)
+    p73 = tmp_path / "v73.mat"     # MATLAB -v7.3: HDF5, a struct is a group, arrays stored column-major
+    with h5py.File(p73, "w") as f:
+        g = f.create_group("rec")
+        g.create_dataset("acc", data=a[None, :])
+        g.create_dataset("time_ms", data=1e3 * t[None, :])
+    rec = read_record(p73)
+    assert rec.names == ("acc",) and rec.fs_hz == pytest.approx(FS, rel=1e-9)
+    np.testing.assert_array_equal(rec.data[:, 0], a)
+    bad = tmp_path / "bad.mat"
+    sio.savemat(bad, {"acc": a, "t": t, "fs": 2 * FS})
+    with pytest.raises(InputError, match="within 1 %"):
+        read_record(bad)
