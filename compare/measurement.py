@@ -19,7 +19,8 @@ key                        required  meaning
                                      ``{te_um = "dte_m"}`` (:mod:`compare.channels`: they settle effects
                                      the sensor cannot tell apart); each column's gain is fitted
 ``channels``               no        names of the columns of a file without names
-``time_column``            no        CSV column holding time (s) (default: one named ``time``/``t``)
+``time_column``            no        CSV column holding time (s) (default: one named ``time``/``t``,
+                                     also among ``channels``; a unit in the name: ``time_ms``)
 ``variable``               no        NPZ/MAT variable to read when the file holds several
 ``format``                 no        one of :data:`compare.formats.FORMATS` (default ``"auto"``)
 ``start_s``, ``duration_s`` no       keep only this part of the record (s)
@@ -300,18 +301,37 @@ def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "
                        secondary=secondary)
 
 
+def _time_from_channels(rec, names: tuple, time_column: str | None, where: str):
+    """A file without names whose sidecar ``channels`` name its time column (``time_column``, or a name of
+    :mod:`compare.text_records`): the rate from it, and it is no channel. ``rec`` with ``names`` otherwise."""
+    from dataclasses import replace
+
+    from compare.text_records import seconds_per_unit, times_to_fs
+
+    col = time_column if time_column in names else next((n for n in names if seconds_per_unit(n) is not None), None)
+    if rec.fs_hz is not None or col is None:
+        return replace(rec, names=tuple(names))
+    i = names.index(col)
+    fs = times_to_fs(rec.data[:, i] * (seconds_per_unit(col) or 1.0), f"{where}: column {col}")
+    return replace(rec, names=tuple(names[:i] + names[i + 1:]), data=np.delete(rec.data, i, axis=1), fs_hz=fs)
+
+
 def load_measurement(path: str | Path, sidecar: Sidecar | str | Path | None = None) -> Measurement:
     """Load and validate a measurement file with its sidecar (found beside it when not given)."""
     p = Path(path)
     require(p.is_file(), "measurement", str(p), "an existing file")
     if not isinstance(sidecar, Sidecar):
         sidecar = read_sidecar(sidecar if sidecar is not None else find_sidecar(p))
-    rec = read_record(p, sidecar.format, time_column=sidecar.time_column, variable=sidecar.variable)
+    named_by_sidecar = sidecar.channels is not None and sidecar.time_column in sidecar.channels
+    rec = read_record(p, sidecar.format, time_column=None if named_by_sidecar else sidecar.time_column,
+                      variable=sidecar.variable)
     names = rec.names
     if sidecar.channels is not None:
         require(len(sidecar.channels) == rec.data.shape[1], "channels", list(sidecar.channels),
                 f"{rec.data.shape[1]} names, one per data column of {p.name}")
         names = sidecar.channels
+        rec = _time_from_channels(rec, names, sidecar.time_column, p.name)
+        names = rec.names
     hints = dict(rec.hints)
     if rec.fs_hz is not None:
         if sidecar.fs_hz is not None:

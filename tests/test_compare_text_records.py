@@ -125,3 +125,23 @@ def test_a_time_vector_in_a_mat_file_gives_the_rate_and_is_no_channel_and_must_a
     sio.savemat(bad, {"acc": a, "t": t, "fs": 2 * FS})
     with pytest.raises(InputError, match="within 1 %"):
         read_record(bad)
+
+
+def test_a_file_without_names_whose_sidecar_names_its_time_column_gets_its_rate_from_it(tmp_path):
+    """A headerless TSV (time, acceleration, tacho) with ``channels = ["time_ms", "acc", "tacho"]`` in its
+    sidecar: the rate comes from the named time column (in ms), which is no channel; the record is the file's."""
+    import json
+
+    from compare.measurement import load_measurement
+
+    n = 4000
+    t = np.arange(n) / FS
+    a = np.round(np.sin(2 * np.pi * 310.0 * t), 6)
+    b = np.round(np.cos(2 * np.pi * 17.0 * t), 6)
+    p = tmp_path / "rig.tsv"
+    p.write_text("\n".join(_rows((1e3 * t, a, b), "\t", "{:.6f}")) + "\n")
+    (tmp_path / "rig.json").write_text(json.dumps({"pair": "spur-gds", "speed_rpm": 1000.0, "torque_nm": 50.0,
+                                                    "sensor": "acc", "channels": ["time_ms", "acc", "tacho"]}))
+    m = load_measurement(p)
+    assert m.fs_hz == pytest.approx(FS, rel=1e-6) and set(m.channels) == {"acc", "tacho"}
+    np.testing.assert_array_equal(m.signal, a)
