@@ -35,6 +35,7 @@ from compare.error import Residuals, fit_gain_db, reliability, residuals
 from compare.measurement import Measurement
 from compare.speed import SpeedEstimate, constant_track, refine_speed
 from compare.plan import VIEWS, Plan, make_plan
+from compare.spectra import below_shafts_removed, low_cut_hz
 from compare.views import SignalViews, analyse, pinion_lines
 from gearpit.errors import require
 
@@ -53,6 +54,9 @@ class Reference:
     speed: SpeedEstimate
     plan: Plan
     views: SignalViews
+    #: RMS of the measurement's content below every shaft order (its mean left out), over the RMS of the rest:
+    #: removed before every view (:func:`compare.spectra.below_shafts_removed`), reported
+    below_shafts_ratio: float = 0.0
 
     @property
     def fs_hz(self) -> float:
@@ -85,7 +89,23 @@ def prepare_reference(measurement: Measurement, *, duration_s: float | None = No
     track = speed.track if duration_s is None else _crop_track(speed, len(x), measurement.fs_hz)
     plan = make_plan(x, measurement.fs_hz, track, measurement.pair, lines_from=lines_from)
     views = analyse(x, measurement.fs_hz, track, plan, keep_curves=True)
-    return Reference(measurement=measurement, x=np.asarray(x, float), speed=speed, plan=plan, views=views)
+    x = np.asarray(x, float)
+    rest = below_shafts_removed(x, measurement.fs_hz, plan)
+    low = float(np.std(x - rest)) / max(float(np.std(rest)), 1e-300)
+    return Reference(measurement=measurement, x=x, speed=speed, plan=plan, views=views, below_shafts_ratio=low)
+
+
+#: removed content below every shaft order is reported when its RMS exceeds this fraction of the rest's
+BELOW_SHAFTS_REPORTED = 0.1
+
+
+def below_shafts_message(ref: Reference) -> str | None:
+    """One line when the measurement held notable content below every shaft order (:data:`BELOW_SHAFTS_REPORTED`)."""
+    if ref.below_shafts_ratio <= BELOW_SHAFTS_REPORTED:
+        return None
+    return (f"the measurement holds content below {low_cut_hz(ref.plan):.3g} Hz (half the slower shaft's rate), "
+            f"{ref.below_shafts_ratio:.3g} times the RMS of the rest: no order of either shaft (a sensor's drift, a "
+            "foundation's sway, a slow process), removed from measurement and model before every view")
 
 
 def _crop_track(speed: SpeedEstimate, n: int, fs_hz: float):

@@ -23,6 +23,7 @@ from compare.path_regime import path_regime_text
 from compare.response import response_text
 from compare.chaos import describe_interval, drivetrains_message
 from compare.escalation import reason_text
+from compare.spectra import low_cut_hz
 from gearpit import __version__
 from gearpit.atomic import atomic_path
 
@@ -61,7 +62,8 @@ def document(comparison, attribution=None, ledger_rows=(), *, measurement_path: 
                         "sensor": m.sensor, "tacho": m.tacho, "fault": m.fault,
                         "speed_rpm_nominal": m.speed_rpm, "speed_rpm": ref.speed.speed_rpm,
                         "speed_method": ref.speed.method, "speed_drift_rad": _num(ref.speed.drift_rad),
-                        "speed_tracked": bool(ref.speed.tracked), "torque_nm": m.torque_nm, "pair": m.pair.to_dict()},
+                        "speed_tracked": bool(ref.speed.tracked), "torque_nm": m.torque_nm, "pair": m.pair.to_dict(),
+                        "low_cut_hz": low_cut_hz(plan), "below_shafts_ratio": float(ref.below_shafts_ratio)},
         "model": {"path": model_path, "description": comparison.model.describe(), "sensor": comparison.model.sensor,
                   "effects": [e.to_dict() for e in comparison.model.effects]},
         "gain_db": g,
@@ -131,6 +133,14 @@ def _pair_html(check: dict | None) -> list[str]:
     return [] if msg is None else [f"<p><b>Gear pair:</b> {html.escape(msg)}</p>"]
 
 
+def _below_shafts_html(ref) -> list[str]:
+    """The content below every shaft order that was removed (compare.comparison.below_shafts_message)."""
+    from compare.comparison import below_shafts_message
+
+    msg = below_shafts_message(ref)
+    return [] if msg is None else [f"<p><b>Below the shaft orders:</b> {html.escape(msg)}.</p>"]
+
+
 def _calibration_html(cal: dict | None, escalation: dict | None = None) -> list[str]:
     """The nuisance-calibration section (compare.calibration; why it ran: compare.escalation)."""
     why = []
@@ -179,6 +189,7 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
              f"<p>Model: <code>{html.escape(doc['model']['description'])}</code>. Sensor gain fitted: "
              f"{doc['gain_db']:+.2f} dB.</p>",
              *_pair_html(doc.get("pair_check")),
+             *_below_shafts_html(comparison.reference),
              *_calibration_html(doc.get("calibration"), doc.get("escalation")),
              "<h2>Error</h2>",
              _table(["view", "error (dB)", "raw error E (dB)", "noise error N (dB)"],

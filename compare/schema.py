@@ -68,7 +68,14 @@ SCHEMA = {
                                                               "measured (tachometer, or no two clear harmonics)"},
                            "speed_tracked": {"type": "boolean",
                                              "description": "the measurement's views follow that drift"},
-                           "torque_nm": {"type": "number"}, "pair": {"type": "object"}}},
+                           "torque_nm": {"type": "number"}, "pair": {"type": "object"},
+                           "low_cut_hz": {"type": "number",
+                                          "description": "content below this frequency (half the slower shaft's "
+                                                         "rate) is no shaft order and was removed from measurement "
+                                                         "and model before every view (compare.spectra)"},
+                           "below_shafts_ratio": {"type": "number",
+                                                  "description": "RMS of what was removed (its mean left out) "
+                                                                 "over the RMS of the rest"}}},
         "model": {"type": "object", "required": ["description", "sensor", "effects"],
                   "properties": {"path": _STR, "description": {"type": "string"}, "sensor": {"type": "string"},
                                  "effects": {"type": "array", "items": {"type": "object", "required": ["name"]}}}},

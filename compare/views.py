@@ -49,8 +49,8 @@ from functools import lru_cache
 import numpy as np
 
 from compare.plan import INDICATORS, STATS, Location, Plan
-from compare.spectra import (EXP_Q, FLOOR_QUANTILE, OVERSAMPLE, angle_records, db, envelope_power, non_order,
-                             non_order_wheel, power_spectrum, smooth_floor)
+from compare.spectra import (EXP_Q, FLOOR_QUANTILE, OVERSAMPLE, angle_records, below_shafts_removed, db,
+                             envelope_power, non_order, non_order_wheel, power_spectrum, smooth_floor)
 from features.indicators import gear_condition_indicators
 from features.statistics import time_domain_statistics
 from features.tsa import AngleTrack, TimeInterpolant, split_tsa
@@ -186,7 +186,9 @@ def _three_max(p: np.ndarray, lo: np.ndarray, i0: np.ndarray, hi: np.ndarray) ->
 
 
 def analyse(x: np.ndarray, fs_hz: float, track: AngleTrack, plan: Plan, *, keep_curves: bool = False) -> SignalViews:
-    """Levels and floors (dB) of ``x`` at the plan's locations (module docstring)."""
+    """Levels and floors (dB) of ``x`` at the plan's locations (module docstring), its content below every shaft
+    order removed first (:func:`compare.spectra.below_shafts_removed`)."""
+    x = below_shafts_removed(x, fs_hz, plan)
     rec = angle_records(x, fs_hz, track, plan)
     xp = rec.pinion.ravel()
     pp = power_spectrum(xp)

@@ -30,7 +30,7 @@ from pathlib import Path
 
 from compare.candidates import Attribution, AttributionSettings, within_noise
 from compare.channels import resolution_message
-from compare.comparison import Comparison, prepare_reference
+from compare.comparison import Comparison, below_shafts_message, prepare_reference
 from compare.escalation import compare_and_attribute, reason_text
 from compare.joint_refit import joint_refit_message
 from compare.ledger import append_row, last_candidate, ledger_path, make_row, read_ledger
@@ -110,6 +110,8 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
         messages.append(f"the speed drifts within the record ({ref.speed.drift_rad:.2f} rad RMS of the mesh phase, "
                         "slower than half the wheel's rotation; read from two mesh harmonics that agree): the "
                         "measurement's views follow it, the model runs at the mean speed")
+    if (msg := below_shafts_message(ref)) is not None:
+        messages.append(msg)
     pair_check = check_pair(measurement, ref.speed)
     if (msg := pair_message(pair_check)) is not None:
         messages.append(msg)
