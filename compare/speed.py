@@ -1,7 +1,9 @@
 """The measured operating speed: refined from a tachometer or from the spectrum, and the shaft angle track.
 
-- With a tachometer: the pulse times (:func:`features.tsa.tacho_pulse_times`) give
-  the shaft angle at each pulse; a straight line through them (least squares)
+- With a tachometer: the pulse times (:func:`features.tsa.tacho_pulse_times`, a Schmitt
+  trigger; bounces, spikes and missing pulses: :func:`features.tsa.tacho_pulse_index`)
+  give the shaft angle at each pulse, and their rate must lie within
+  :data:`TACHO_SPEED_TOLERANCE` of the sidecar's speed; a straight line through them (least squares)
   is the angle track, or a cubic when the pulses stray more than
   :data:`DRIFT_RAD` (RMS) from a constant speed: slow drift is followed,
   fluctuations within a revolution are not (they stay visible in the views,
@@ -28,7 +30,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from features.spectra import line_amplitudes
-from features.tsa import AngleTrack, tacho_pulse_times
+from features.tsa import AngleTrack, tacho_pulse_index, tacho_pulse_times
 from gearpit.errors import InputError, require
 
 TWO_PI = 2.0 * np.pi
@@ -39,6 +41,9 @@ DRIFT_RAD = 0.02
 DRIFT_AGREEMENT = 0.5
 #: ... and only from mesh harmonics standing this far (dB) above their local floor (the median within 4 shaft orders)
 DRIFT_LINE_DB = 20.0
+#: a tachometer's speed may differ from the sidecar's nominal one by this fraction; more is a wrong sidecar
+#: (pulses per revolution, shaft) and is refused
+TACHO_SPEED_TOLERANCE = 0.25
 
 
 @dataclass(frozen=True, eq=False)
@@ -79,11 +84,17 @@ def constant_track(n_samples: int, fs_hz: float, fr_hz: float) -> AngleTrack:
 def speed_from_tacho(tacho: np.ndarray, fs_hz: float, *, z_pinion: int, z_wheel: int, pulses_per_rev: int = 1,
                      shaft: str = "pinion", nominal_rpm: float) -> SpeedEstimate:
     """Mean speed and smooth pinion angle track from tachometer pulses (module docstring)."""
-    times = tacho_pulse_times(tacho, fs_hz)
+    per_rev = 1.0 if shaft == "pinion" else z_wheel / z_pinion  # pinion revs per tacho-shaft rev
+    expected_s = 60.0 / nominal_rpm * per_rev / pulses_per_rev      # the pulse interval the sidecar implies
+    times, index, step = tacho_pulse_index(tacho_pulse_times(tacho, fs_hz), expected_s)
     require(times.size >= pulses_per_rev + 2, "tacho", f"{times.size} pulses",
             f">= {pulses_per_rev + 2} pulses (more than one revolution of the {shaft})")
-    per_rev = 1.0 if shaft == "pinion" else z_wheel / z_pinion  # pinion revs per tacho-shaft rev
-    angle = TWO_PI * per_rev * np.arange(times.size) / pulses_per_rev
+    require(abs(step / expected_s - 1.0) <= TACHO_SPEED_TOLERANCE, "tacho",
+            f"a pulse every {1e3 * step:.4g} ms, i.e. {60.0 * per_rev / (pulses_per_rev * step):.5g} rpm of the pinion "
+            f"with tacho_pulses_per_rev = {pulses_per_rev} on the {shaft}",
+            f"within {100 * TACHO_SPEED_TOLERANCE:g} % of the sidecar's speed_rpm {nominal_rpm:g} (check speed_rpm, "
+            "tacho_pulses_per_rev and tacho_shaft)")
+    angle = TWO_PI * per_rev * index / pulses_per_rev
     n = len(tacho)
     duration = (n - 1) / fs_hz
     tc = times.mean()

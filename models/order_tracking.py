@@ -32,7 +32,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline, PchipInterpolator
 from scipy.signal import fftconvolve
 
-from features.tsa import tacho_pulse_times
+from features.tsa import tacho_pulse_index, tacho_pulse_times
 from gearpit.errors import require
 
 TWO_PI = 2.0 * np.pi
@@ -68,14 +68,18 @@ def mesh_angle(x: np.ndarray, fs_hz: float, fr_hz: float, z_pinion: int, max_har
     return (np.unwrap(np.angle(base)) + carrier) / (m * z_pinion), m
 
 
-def tacho_angle(tacho: np.ndarray, fs_hz: float, *, pulses_per_rev: int = 1, per_rev: float = 1.0) -> np.ndarray:
+def tacho_angle(tacho: np.ndarray, fs_hz: float, *, pulses_per_rev: int = 1, per_rev: float = 1.0,
+                nominal_rpm: float | None = None) -> np.ndarray:
     """Pinion angle (rad) at every sample from a tachometer channel: pulse ``k`` at ``2 pi k per_rev /
-    pulses_per_rev`` (``per_rev``: pinion revolutions per revolution of the tachometer's shaft), a monotone
-    cubic between pulses, the mean speed of the first and last revolution beyond them."""
-    times = tacho_pulse_times(tacho, fs_hz)
+    pulses_per_rev`` (``per_rev``: pinion revolutions per revolution of the tachometer's shaft; a missing pulse
+    skips a ``k``, a bounce or a spike is dropped: :func:`features.tsa.tacho_pulse_index`, its interval from
+    ``nominal_rpm`` of the pinion when given), a monotone cubic between pulses, the mean speed of the first and
+    last revolution beyond them."""
+    expected = None if nominal_rpm is None else 60.0 / nominal_rpm * per_rev / pulses_per_rev
+    times, index, _ = tacho_pulse_index(tacho_pulse_times(tacho, fs_hz), expected)
     require(times.size >= 2 * pulses_per_rev + 1, "tacho", f"{times.size} pulses",
             f">= {2 * pulses_per_rev + 1} pulses (two revolutions)")
-    ang = TWO_PI * per_rev * np.arange(times.size) / pulses_per_rev
+    ang = TWO_PI * per_rev * index / pulses_per_rev
     t = np.arange(len(tacho)) / fs_hz
     out = PchipInterpolator(times, ang, extrapolate=False)(t)
     k = pulses_per_rev

@@ -182,7 +182,7 @@ def tracked_record(measurement, speed_rpm: float, method: str) -> tuple[np.ndarr
     if method == "tacho":
         sc = measurement.sidecar
         angle = tacho_angle(measurement.tacho_signal, measurement.fs_hz, pulses_per_rev=sc.tacho_pulses_per_rev,
-                            per_rev=1.0 if sc.tacho_shaft == "pinion" else z2 / z1)
+                            per_rev=1.0 if sc.tacho_shaft == "pinion" else z2 / z1, nominal_rpm=speed_rpm)
     else:
         try:
             angle = mesh_angle(x, measurement.fs_hz, speed_rpm / 60.0, z1)[0]
