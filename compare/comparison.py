@@ -35,6 +35,7 @@ from compare.error import Residuals, fit_gain_db, reliability, residuals
 from compare.measurement import Measurement
 from compare.speed import SpeedEstimate, constant_track, refine_speed
 from compare.plan import VIEWS, Plan, make_plan
+from compare.quality import clipping
 from compare.spectra import below_shafts_removed, low_cut_hz
 from compare.views import SignalViews, analyse, pinion_lines
 from gearpit.errors import require
@@ -57,6 +58,8 @@ class Reference:
     #: RMS of the measurement's content below every shaft order (its mean left out), over the RMS of the rest:
     #: removed before every view (:func:`compare.spectra.below_shafts_removed`), reported
     below_shafts_ratio: float = 0.0
+    #: whether the sensor channel is clipped (:func:`compare.quality.clipping`), reported
+    clipping: dict = field(default_factory=dict)
 
     @property
     def fs_hz(self) -> float:
@@ -92,7 +95,8 @@ def prepare_reference(measurement: Measurement, *, duration_s: float | None = No
     x = np.asarray(x, float)
     rest = below_shafts_removed(x, measurement.fs_hz, plan)
     low = float(np.std(x - rest)) / max(float(np.std(rest)), 1e-300)
-    return Reference(measurement=measurement, x=x, speed=speed, plan=plan, views=views, below_shafts_ratio=low)
+    return Reference(measurement=measurement, x=x, speed=speed, plan=plan, views=views, below_shafts_ratio=low,
+                     clipping=clipping(x))
 
 
 #: removed content below every shaft order is reported when its RMS exceeds this fraction of the rest's

@@ -63,7 +63,8 @@ def document(comparison, attribution=None, ledger_rows=(), *, measurement_path: 
                         "speed_rpm_nominal": m.speed_rpm, "speed_rpm": ref.speed.speed_rpm,
                         "speed_method": ref.speed.method, "speed_drift_rad": _num(ref.speed.drift_rad),
                         "speed_tracked": bool(ref.speed.tracked), "torque_nm": m.torque_nm, "pair": m.pair.to_dict(),
-                        "low_cut_hz": low_cut_hz(plan), "below_shafts_ratio": float(ref.below_shafts_ratio)},
+                        "low_cut_hz": low_cut_hz(plan), "below_shafts_ratio": float(ref.below_shafts_ratio),
+                        "clipping": dict(ref.clipping)},
         "model": {"path": model_path, "description": comparison.model.describe(), "sensor": comparison.model.sensor,
                   "effects": [e.to_dict() for e in comparison.model.effects]},
         "gain_db": g,
@@ -134,11 +135,18 @@ def _pair_html(check: dict | None) -> list[str]:
 
 
 def _below_shafts_html(ref) -> list[str]:
-    """The content below every shaft order that was removed (compare.comparison.below_shafts_message)."""
+    """What the measurement's own recording says (compare.quality: clipping) and the content below every shaft
+    order that was removed (compare.comparison.below_shafts_message)."""
     from compare.comparison import below_shafts_message
 
-    msg = below_shafts_message(ref)
-    return [] if msg is None else [f"<p><b>Below the shaft orders:</b> {html.escape(msg)}.</p>"]
+    from compare.quality import clipping_message
+
+    out = []
+    if (msg := clipping_message(ref.clipping, ref.measurement.sensor)) is not None:
+        out.append(f"<p class='flag'><b>Clipped:</b> {html.escape(msg)}.</p>")
+    if (msg := below_shafts_message(ref)) is not None:
+        out.append(f"<p><b>Below the shaft orders:</b> {html.escape(msg)}.</p>")
+    return out
 
 
 def _calibration_html(cal: dict | None, escalation: dict | None = None) -> list[str]:

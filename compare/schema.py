@@ -75,7 +75,18 @@ SCHEMA = {
                                                          "and model before every view (compare.spectra)"},
                            "below_shafts_ratio": {"type": "number",
                                                   "description": "RMS of what was removed (its mean left out) "
-                                                                 "over the RMS of the rest"}}},
+                                                                 "over the RMS of the rest"},
+                           "clipping": {"type": "object",
+                                        "description": "whether the sensor channel is clipped (compare.quality): "
+                                                       "samples piled up on its extremes",
+                                        "required": ["clipped", "fraction", "low", "high", "limits"],
+                                        "properties": {"clipped": {"type": "boolean"},
+                                                       "fraction": {"type": "number",
+                                                                    "description": "share of samples on a clipped "
+                                                                                   "extreme"},
+                                                       "low": {"type": "boolean"}, "high": {"type": "boolean"},
+                                                       "limits": {"type": "array", "items": {"type": "number"},
+                                                                  "minItems": 2, "maxItems": 2}}}}},
         "model": {"type": "object", "required": ["description", "sensor", "effects"],
                   "properties": {"path": _STR, "description": {"type": "string"}, "sensor": {"type": "string"},
                                  "effects": {"type": "array", "items": {"type": "object", "required": ["name"]}}}},

@@ -36,6 +36,7 @@ from compare.joint_refit import joint_refit_message
 from compare.ledger import append_row, last_candidate, ledger_path, make_row, read_ledger
 from compare.measurement import load_measurement
 from compare.pair_check import check_pair, pair_message
+from compare.quality import clipping_message
 from compare.model import ComparisonModel, parse_add
 from compare.response import attach_responses
 from compare.report import document, write_html, write_json
@@ -111,6 +112,8 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
                         "slower than half the wheel's rotation; read from two mesh harmonics that agree): the "
                         "measurement's views follow it, the model runs at the mean speed")
     if (msg := below_shafts_message(ref)) is not None:
+        messages.append(msg)
+    if (msg := clipping_message(ref.clipping, measurement.sensor)) is not None:
         messages.append(msg)
     pair_check = check_pair(measurement, ref.speed)
     if (msg := pair_message(pair_check)) is not None:

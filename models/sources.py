@@ -27,7 +27,8 @@ where its mesh phase strays from the constant-speed line by more than
 :data:`~models.order_tracking.TRACK_MIN_RAD` (labels ``mesh_phase_dev_rad``, ``order_tracked``). At a measured
 speed the sidecar's pair is checked too (:func:`pair_warning`, :mod:`compare.pair_check`): a record with no mesh
 line at ``z1`` x its speed, or whose strongest sideband comb is no shaft of the pair, carries a warning
-(``pair_note``) into every prediction made from it.
+(``pair_note``) into every prediction made from it; so does a clipped sensor channel (``clip_note``,
+:mod:`compare.quality`).
 """
 from __future__ import annotations
 
@@ -199,6 +200,7 @@ def load_measurements(paths: list[str | Path], *, refine_speed: bool = True) -> 
     """Records of measurement files (with sidecars) as one signal set (see module docstring); ``refine_speed``:
     measure each record's speed (:func:`measured_speed`) instead of taking the sidecar's."""
     from compare.measurement import load_measurement
+    from compare.quality import clipping, clipping_message
 
     files = [Path(p) for p in paths]
     require(len(files) >= 1, "FILES", 0, "at least one measurement file")
@@ -214,11 +216,13 @@ def load_measurements(paths: list[str | Path], *, refine_speed: bool = True) -> 
     for m, f in zip(ms, files):
         speed, method, note = measured_speed(m) if refine_speed else (float(m.speed_rpm), "sidecar", "")
         pair_note = pair_warning(m, speed, method) if method != "sidecar" else ""
+        clip_note = clipping_message(clipping(m.signal), m.sensor) or ""
         x, speed, dev = tracked_record(m, speed, method) if refine_speed else (m.signal, speed, np.nan)
         records.append(x)
         rows.append({"file": f.name, "speed_rpm": speed, "torque_nm": float(m.torque_nm),
                      "speed_rpm_sidecar": float(m.speed_rpm), "speed_method": method, "speed_note": note,
-                     "pair_note": pair_note, "mesh_phase_dev_rad": dev, "order_tracked": bool(dev > TRACK_MIN_RAD)})
+                     "pair_note": pair_note, "clip_note": clip_note, "mesh_phase_dev_rad": dev,
+                     "order_tracked": bool(dev > TRACK_MIN_RAD)})
     refs = _references(ms, files, rows, refine_speed) if any(m.sidecar.reference for m in ms) else None
     n = min(r.size for r in records + (refs or []))
     x = np.stack([np.asarray(r[:n], dtype=np.float32) for r in records])
