@@ -79,6 +79,9 @@ class Plan:
     extra_lines_hz: tuple = ()
     extra_envelope_hz: tuple = ()
     locations: tuple = ()
+    #: content below this frequency is removed from every signal before the views (0: nothing removed;
+    #: :func:`compare.comparison.prepare_reference` sets it when the measurement holds such content)
+    low_cut_hz: float = 0.0
 
     @property
     def fr_wheel_hz(self) -> float:

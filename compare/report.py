@@ -23,7 +23,6 @@ from compare.path_regime import path_regime_text
 from compare.response import response_text
 from compare.chaos import describe_interval, drivetrains_message
 from compare.escalation import reason_text
-from compare.spectra import low_cut_hz
 from gearpit import __version__
 from gearpit.atomic import atomic_path
 
@@ -63,7 +62,7 @@ def document(comparison, attribution=None, ledger_rows=(), *, measurement_path: 
                         "speed_rpm_nominal": m.speed_rpm, "speed_rpm": ref.speed.speed_rpm,
                         "speed_method": ref.speed.method, "speed_drift_rad": _num(ref.speed.drift_rad),
                         "speed_tracked": bool(ref.speed.tracked), "torque_nm": m.torque_nm, "pair": m.pair.to_dict(),
-                        "low_cut_hz": low_cut_hz(plan), "below_shafts_ratio": float(ref.below_shafts_ratio),
+                        "low_cut_hz": float(plan.low_cut_hz), "below_shafts_ratio": float(ref.below_shafts_ratio),
                         "clipping": dict(ref.clipping)},
         "model": {"path": model_path, "description": comparison.model.describe(), "sensor": comparison.model.sensor,
                   "effects": [e.to_dict() for e in comparison.model.effects]},

@@ -71,11 +71,13 @@ SCHEMA = {
                            "torque_nm": {"type": "number"}, "pair": {"type": "object"},
                            "low_cut_hz": {"type": "number",
                                           "description": "content below this frequency (half the slower shaft's "
-                                                         "rate) is no shaft order and was removed from measurement "
-                                                         "and model before every view (compare.spectra)"},
+                                                         "rate: no shaft order) was removed from measurement and "
+                                                         "model before every view; 0: nothing removed, the "
+                                                         "measurement held too little there "
+                                                         "(compare.comparison.BELOW_SHAFTS_REMOVED)"},
                            "below_shafts_ratio": {"type": "number",
-                                                  "description": "RMS of what was removed (its mean left out) "
-                                                                 "over the RMS of the rest"},
+                                                  "description": "RMS of the measurement's content there (its mean "
+                                                                 "left out) over the RMS of the rest"},
                            "clipping": {"type": "object",
                                         "description": "whether the sensor channel is clipped (compare.quality): "
                                                        "samples piled up on its extremes",

@@ -106,16 +106,16 @@ def low_cut_hz(plan) -> float:
     return LOW_CUT_ORDER * min(plan.fr_pinion_hz, plan.fr_wheel_hz)
 
 
-def below_shafts_removed(x: np.ndarray, fs_hz: float, plan) -> np.ndarray:
-    """``x`` without its content below :func:`low_cut_hz` (a zero-phase Butterworth high-pass of
+def high_passed(x: np.ndarray, fs_hz: float, cut: float) -> np.ndarray:
+    """``x`` without its content below ``cut`` Hz (:func:`low_cut_hz`; a zero-phase Butterworth high-pass of
     :data:`LOW_CUT_POLES` poles, applied forwards and backwards: -0.03 dB at the slower shaft's first order).
 
     Why: a sensor's drift, an offset or a foundation's sway (a 0.7 Hz wander and a ramp of 1.5-2 times the RMS on
     the test rig, whose wheel turns at 4.8 Hz) is no gear physics, but the wheel's TSA of ten revolutions does
     not average it out: the comparison read it as +17 dB in the wheel TSA's strongest tooth, +13 dB in its energy
     ratio, +6 dB at the first wheel order (total error 0.27 -> 3.79 dB on a healthy rig) and named none of it.
-    Measurement and model pass through the same filter, so identical records stay identical; what was removed
-    from the measurement is reported beside the views (:func:`compare.comparison.prepare_reference`).
+    Measurement and model pass through the same filter (:func:`below_shafts_removed`), so identical records stay
+    identical; when and why: :func:`compare.comparison.prepare_reference`.
 
     The record's ends: a filter run forwards and backwards needs the record continued beyond them. Point-reflected
     (scipy's default) a record's gear content jumps by twice its end value there, a step whose decay (~0.3 s at
@@ -125,7 +125,6 @@ def below_shafts_removed(x: np.ndarray, fs_hz: float, plan) -> np.ndarray:
     mirrored, which keeps it without a step; the slow part is estimated with mirrored ends first and then again
     from the filtered record, :data:`LOW_CUT_PASSES` times (7 ms for 2 s at 20 kHz, 54 ms for 10 s at 51.2 kHz)."""
     x = np.asarray(x, float)
-    cut = low_cut_hz(plan)
     if not 0.0 < cut < 0.45 * fs_hz or x.size < 16:
         return x
     from scipy.signal import sosfiltfilt
@@ -140,6 +139,14 @@ def below_shafts_removed(x: np.ndarray, fs_hz: float, plan) -> np.ndarray:
         y = sosfiltfilt(sos, np.concatenate([head, x, tail]), padtype=None)[n:n + x.size]
         slow = x - y
     return y
+
+
+
+
+def below_shafts_removed(x: np.ndarray, fs_hz: float, plan) -> np.ndarray:
+    """``x`` high-passed at the plan's ``low_cut_hz`` (:func:`high_passed`); unchanged when it is 0."""
+    cut = float(getattr(plan, "low_cut_hz", 0.0))
+    return np.asarray(x, float) if cut <= 0.0 else high_passed(x, fs_hz, cut)
 
 
 def angle_records(x: np.ndarray, fs_hz: float, track: AngleTrack, plan) -> AngleRecords:

@@ -187,7 +187,7 @@ def _three_max(p: np.ndarray, lo: np.ndarray, i0: np.ndarray, hi: np.ndarray) ->
 
 def analyse(x: np.ndarray, fs_hz: float, track: AngleTrack, plan: Plan, *, keep_curves: bool = False) -> SignalViews:
     """Levels and floors (dB) of ``x`` at the plan's locations (module docstring), its content below every shaft
-    order removed first (:func:`compare.spectra.below_shafts_removed`)."""
+    order removed first when the plan says so (:func:`compare.spectra.below_shafts_removed`)."""
     x = below_shafts_removed(x, fs_hz, plan)
     rec = angle_records(x, fs_hz, track, plan)
     xp = rec.pinion.ravel()
