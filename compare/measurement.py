@@ -11,6 +11,10 @@ key                        required  meaning
 ``torque_nm``              [2]_      pinion (input) torque (N m)
 ``pair``                   yes       preset name (``"spur-gds"``) or a pair table as in a pair TOML
 ``sensor``                 [2]_      the vibration channel: name or 0-based column index
+``sensor_quantity``        no        what the sensor measures: ``"acceleration"`` (default),
+                                     ``"velocity"`` or ``"displacement"`` (read as acceleration:
+                                     :func:`features.derivative.derivative`, any unit: the gain
+                                     is fitted)
 ``tacho``                  no        tachometer channel (name or index); none: speed from the spectrum
 ``tacho_pulses_per_rev``   no        pulses per revolution of ``tacho_shaft`` (default 1)
 ``tacho_shaft``            no        ``"pinion"`` (default) or ``"wheel"``
@@ -51,11 +55,13 @@ from compare.formats import FORMATS, read_record
 from gearpit.errors import InputError, require, require_positive
 from gearpit.tomlio import check_keys, read_toml
 
-SIDECAR_KEYS = ("fs_hz", "speed_rpm", "torque_nm", "pair", "sensor", "tacho", "tacho_pulses_per_rev", "tacho_shaft",
-                "fault", "channels", "time_column", "variable", "format", "start_s", "duration_s", "secondary",
-                "reference")
+SIDECAR_KEYS = ("fs_hz", "speed_rpm", "torque_nm", "pair", "sensor", "sensor_quantity", "tacho", "tacho_pulses_per_rev",
+                "tacho_shaft", "fault", "channels", "time_column", "variable", "format", "start_s", "duration_s",
+                "secondary", "reference")
 SIDECAR_SUFFIXES = (".toml", ".json", ".meta.toml", ".meta.json")
 MIN_REVOLUTIONS = 2.0
+#: sidecar ``sensor_quantity`` -> times the record is differentiated to read it as acceleration
+SENSOR_QUANTITIES = {"acceleration": 0, "velocity": 1, "displacement": 2}
 
 
 @dataclass(frozen=True)
@@ -67,6 +73,7 @@ class Sidecar:
     torque_nm: float | None = None
     fs_hz: float | None = None
     sensor: str | int | None = None
+    sensor_quantity: str = "acceleration"
     tacho: str | int | None = None
     tacho_pulses_per_rev: int = 1
     tacho_shaft: str = "pinion"
@@ -121,6 +128,10 @@ class Sidecar:
             if key in d:
                 require(isinstance(d[key], str) and d[key] != "", f"{where}.{key}", d[key], "a non-empty string")
                 kw[key] = d[key]
+        if "sensor_quantity" in d:
+            require(d["sensor_quantity"] in SENSOR_QUANTITIES, f"{where}.sensor_quantity", d["sensor_quantity"],
+                    "one of: " + ", ".join(SENSOR_QUANTITIES))
+            kw["sensor_quantity"] = d["sensor_quantity"]
         if "format" in d:
             require(d["format"] in FORMATS, f"{where}.format", d["format"], "one of: " + ", ".join(FORMATS))
             kw["format"] = d["format"]
@@ -289,6 +300,14 @@ def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "
                 "finite samples only")
     for key in (sensor,) + tuple(secondary):
         require(float(np.ptp(data[key])) > 0, f"channel {key}", "constant", "a varying signal")
+    order = SENSOR_QUANTITIES[sidecar.sensor_quantity]
+    if order:      # read as acceleration; every channel loses the samples the derivative cannot form
+        from features.derivative import HALF_TAPS, derivative
+
+        cut = order * HALF_TAPS
+        require(data[sensor].size > 2 * cut + 1, "measurement length", data[sensor].size,
+                f"> {2 * cut + 1} samples to read the {sidecar.sensor_quantity} as acceleration")
+        data = {k: (derivative(v, float(fs), order) if k == sensor else v[cut:-cut]) for k, v in data.items()}
     pair = sidecar.pair
     slow_hz = pair.shaft_frequency_hz("wheel" if pair.wheel.teeth >= pair.pinion.teeth else "pinion", float(speed))
     n_min = int(math.ceil(MIN_REVOLUTIONS * fs / slow_hz))

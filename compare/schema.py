@@ -57,7 +57,12 @@ SCHEMA = {
             "required": ["path", "fs_hz", "n_samples", "sensor", "speed_rpm", "speed_rpm_nominal", "speed_method",
                          "torque_nm", "pair"],
             "properties": {"path": {"type": "string"}, "fs_hz": {"type": "number"}, "n_samples": {"type": "integer"},
-                           "sensor": {"type": "string"}, "tacho": _STR, "fault": _STR,
+                           "sensor": {"type": "string"},
+                           "sensor_quantity": {"enum": ["acceleration", "velocity", "displacement"],
+                                               "description": "what the sensor measures (sidecar); a velocity or "
+                                                              "displacement is differentiated to acceleration "
+                                                              "(features.derivative) before every view"},
+                           "tacho": _STR, "fault": _STR,
                            "speed_rpm": {"type": "number", "description": "refined mean pinion speed"},
                            "speed_rpm_nominal": {"type": "number"},
                            "speed_method": {"enum": ["tacho", "spectrum", "nominal"]},

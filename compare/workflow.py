@@ -111,6 +111,9 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
         messages.append(f"the speed drifts within the record ({ref.speed.drift_rad:.2f} rad RMS of the mesh phase, "
                         "slower than half the wheel's rotation; read from two mesh harmonics that agree): the "
                         "measurement's views follow it, the model runs at the mean speed")
+    if measurement.sidecar.sensor_quantity != "acceleration":
+        messages.append(f"the sensor measures {measurement.sidecar.sensor_quantity}: read as acceleration "
+                        "(differentiated, features.derivative), as the model's housing channel is")
     if (msg := below_shafts_message(ref)) is not None:
         messages.append(msg)
     if (msg := clipping_message(ref.clipping, measurement.sensor)) is not None:
