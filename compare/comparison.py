@@ -36,7 +36,7 @@ from compare.measurement import Measurement
 from compare.speed import SpeedEstimate, constant_track, refine_speed
 from compare.plan import VIEWS, Plan, make_plan
 from compare.quality import clipping
-from compare.spectra import high_passed, low_cut_hz
+from compare.spectra import below_shafts_share, low_cut_hz
 from compare.views import SignalViews, analyse, pinion_lines
 from gearpit.errors import require
 
@@ -93,8 +93,7 @@ def prepare_reference(measurement: Measurement, *, duration_s: float | None = No
     track = speed.track if duration_s is None else _crop_track(speed, len(x), measurement.fs_hz)
     plan = make_plan(x, measurement.fs_hz, track, measurement.pair, lines_from=lines_from)
     x = np.asarray(x, float)
-    rest = high_passed(x, measurement.fs_hz, low_cut_hz(plan))
-    low = float(np.std(x - rest)) / max(float(np.std(rest)), 1e-300)
+    low, _ = below_shafts_share(x, measurement.fs_hz, low_cut_hz(plan))
     if lines_from is not None:      # a window of a measurement: as the whole record was decided
         plan = replace(plan, low_cut_hz=float(lines_from.low_cut_hz))
     elif low > BELOW_SHAFTS_REMOVED:

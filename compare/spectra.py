@@ -143,6 +143,14 @@ def high_passed(x: np.ndarray, fs_hz: float, cut: float) -> np.ndarray:
 
 
 
+def below_shafts_share(x: np.ndarray, fs_hz: float, cut: float) -> tuple[float, np.ndarray]:
+    """``(share, rest)``: the RMS of ``x``'s content below ``cut`` Hz (its mean left out) over the RMS of the rest,
+    and the rest (:func:`high_passed`)."""
+    x = np.asarray(x, float)
+    rest = high_passed(x, fs_hz, cut)
+    return float(np.std(x - rest)) / max(float(np.std(rest)), 1e-300), rest
+
+
 def below_shafts_removed(x: np.ndarray, fs_hz: float, plan) -> np.ndarray:
     """``x`` high-passed at the plan's ``low_cut_hz`` (:func:`high_passed`); unchanged when it is 0."""
     cut = float(getattr(plan, "low_cut_hz", 0.0))

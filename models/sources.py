@@ -28,7 +28,8 @@ where its mesh phase strays from the constant-speed line by more than
 speed the sidecar's pair is checked too (:func:`pair_warning`, :mod:`compare.pair_check`): a record with no mesh
 line at ``z1`` x its speed, or whose strongest sideband comb is no shaft of the pair, carries a warning
 (``pair_note``) into every prediction made from it; so does a clipped sensor channel (``clip_note``,
-:mod:`compare.quality`).
+:mod:`compare.quality`). A record whose content below every shaft order exceeds 5 % of its RMS has it removed
+and says so (``drift_note``, :func:`without_drift`).
 """
 from __future__ import annotations
 
@@ -196,6 +197,25 @@ def tracked_record(measurement, speed_rpm: float, method: str) -> tuple[np.ndarr
     return y, 60.0 * fr, dev
 
 
+def without_drift(x: np.ndarray, measurement, speed_rpm: float) -> tuple[np.ndarray, str]:
+    """``(record, note)``: a measured record without its content below every shaft order when that exceeds
+    :data:`compare.comparison.BELOW_SHAFTS_REMOVED` of its RMS (a sensor's drift, an offset, a foundation's sway:
+    the comparison's rule, :func:`compare.spectra.high_passed`), with a note saying so; else as it is. Generated
+    records hold 0.3-2.2 % there, so the training data are unchanged and a drifting measurement reaches the
+    classifier as the drift-free record would."""
+    from compare.comparison import BELOW_SHAFTS_REMOVED
+    from compare.spectra import LOW_CUT_ORDER, below_shafts_share
+
+    pair = measurement.pair
+    fr = speed_rpm / 60.0
+    cut = LOW_CUT_ORDER * min(fr, fr * pair.pinion.teeth / pair.wheel.teeth)
+    share, rest = below_shafts_share(x, measurement.fs_hz, cut)
+    if share <= BELOW_SHAFTS_REMOVED:
+        return x, ""
+    return rest, (f"content below {cut:.3g} Hz (no shaft order), {share:.3g} times the RMS of the rest, removed "
+                  "before the classifier (a sensor's drift, an offset, a foundation's sway)")
+
+
 def load_measurements(paths: list[str | Path], *, refine_speed: bool = True) -> SignalSet:
     """Records of measurement files (with sidecars) as one signal set (see module docstring); ``refine_speed``:
     measure each record's speed (:func:`measured_speed`) instead of taking the sidecar's."""
@@ -218,10 +238,11 @@ def load_measurements(paths: list[str | Path], *, refine_speed: bool = True) -> 
         pair_note = pair_warning(m, speed, method) if method != "sidecar" else ""
         clip_note = clipping_message(clipping(m.signal), m.sensor) or ""
         x, speed, dev = tracked_record(m, speed, method) if refine_speed else (m.signal, speed, np.nan)
+        x, drift_note = without_drift(x, m, speed)
         records.append(x)
         rows.append({"file": f.name, "speed_rpm": speed, "torque_nm": float(m.torque_nm),
                      "speed_rpm_sidecar": float(m.speed_rpm), "speed_method": method, "speed_note": note,
-                     "pair_note": pair_note, "clip_note": clip_note, "mesh_phase_dev_rad": dev,
+                     "pair_note": pair_note, "clip_note": clip_note, "drift_note": drift_note, "mesh_phase_dev_rad": dev,
                      "order_tracked": bool(dev > TRACK_MIN_RAD)})
     refs = _references(ms, files, rows, refine_speed) if any(m.sidecar.reference for m in ms) else None
     n = min(r.size for r in records + (refs or []))
@@ -254,7 +275,7 @@ def load_measurements(paths: list[str | Path], *, refine_speed: bool = True) -> 
 
 def _references(ms: list, files: list[Path], rows: list[dict], refine_speed: bool) -> list[np.ndarray]:
     """The healthy reference of every record (sidecar key ``reference``): loaded like the record (speed measured,
-    tracked), then resampled to the record's speed so that their shaft orders fall on the same bins."""
+    tracked, drift removed), then resampled to the record's speed so that their shaft orders fall on the same bins."""
     from scipy.signal import resample
 
     from compare.measurement import load_measurement
@@ -271,6 +292,7 @@ def _references(ms: list, files: list[Path], rows: list[dict], refine_speed: boo
                 f"{m.fs_hz:g} Hz (the record's)")
         speed, method, _ = measured_speed(r) if refine_speed else (float(r.speed_rpm), "sidecar", "")
         y, speed, _ = tracked_record(r, speed, method) if refine_speed else (r.signal, speed, np.nan)
+        y, _ = without_drift(y, r, speed)
         factor = speed / row["speed_rpm"]           # > 1: the reference ran faster, stretch it
         require(abs(factor - 1.0) <= MAX_REFERENCE_SPEED_OFFSET, f"{p.name}: speed_rpm", round(speed, 2),
                 f"within {100 * MAX_REFERENCE_SPEED_OFFSET:g} % of the record's {row['speed_rpm']:.2f} rpm "

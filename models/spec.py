@@ -189,8 +189,9 @@ def check_input(spec: ModelSpec, data: SignalSet, *, allow_mismatch: bool = Fals
                 f">= {need} samples (half the training record length {spec.n_samples})")
         require(data.shaft_hz() is not None, "speed_rpm", None, "the pinion speed of every record (features need it)")
     per_record = [list(common) for _ in range(len(data))]
-    # a measurement whose sidecar speed the spectrum did not confirm; whose sidecar pair it questions; clipped
-    for col in ("speed_note", "pair_note", "clip_note"):
+    # a measurement whose sidecar speed the spectrum did not confirm; whose sidecar pair it questions; clipped;
+    # whose drift was removed
+    for col in ("speed_note", "pair_note", "clip_note", "drift_note"):
         if col in data.labels:
             for i, note in enumerate(data.labels[col].fillna("").astype(str)):
                 if note:
