@@ -85,8 +85,8 @@ def usable_revolutions(track: AngleTrack, fs_hz: float) -> float:
     return (a1 - a0) / (2 * np.pi)
 
 
-#: content below this fraction of the slower shaft's rate is no order of either shaft and is removed before every
-#: view (:func:`below_shafts_removed`)
+#: content below this fraction of the slower shaft's rate is no order of either shaft; removed before every view
+#: when the record holds enough of it (:func:`below_shafts_removed`, :data:`compare.comparison.BELOW_SHAFTS_REMOVED`)
 LOW_CUT_ORDER = 0.5
 LOW_CUT_POLES = 4
 #: passes that continue the record's ends (:func:`below_shafts_removed`): on the test rig with a 0.7 Hz wander of
@@ -113,7 +113,7 @@ def high_passed(x: np.ndarray, fs_hz: float, cut: float) -> np.ndarray:
     Why: a sensor's drift, an offset or a foundation's sway (a 0.7 Hz wander and a ramp of 1.5-2 times the RMS on
     the test rig, whose wheel turns at 4.8 Hz) is no gear physics, but the wheel's TSA of ten revolutions does
     not average it out: the comparison read it as +17 dB in the wheel TSA's strongest tooth, +13 dB in its energy
-    ratio, +6 dB at the first wheel order (total error 0.27 -> 3.79 dB on a healthy rig) and named none of it.
+    ratio, +6 dB at the first wheel order (total error 0.46 -> 3.79 dB on a healthy rig) and named none of it.
     Measurement and model pass through the same filter (:func:`below_shafts_removed`), so identical records stay
     identical; when and why: :func:`compare.comparison.prepare_reference`.
 
@@ -139,8 +139,6 @@ def high_passed(x: np.ndarray, fs_hz: float, cut: float) -> np.ndarray:
         y = sosfiltfilt(sos, np.concatenate([head, x, tail]), padtype=None)[n:n + x.size]
         slow = x - y
     return y
-
-
 
 
 def below_shafts_share(x: np.ndarray, fs_hz: float, cut: float) -> tuple[float, np.ndarray]:

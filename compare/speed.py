@@ -1,7 +1,7 @@
 """The measured operating speed: refined from a tachometer or from the spectrum, and the shaft angle track.
 
-- With a tachometer: the pulse times (:func:`features.tsa.tacho_pulse_times`, a Schmitt
-  trigger; bounces, spikes and missing pulses: :func:`features.tsa.tacho_pulse_index`)
+- With a tachometer: the pulse times (:func:`features.tacho.tacho_pulse_times`, a Schmitt
+  trigger; bounces, spikes and missing pulses: :func:`features.tacho.tacho_pulse_index`)
   give the shaft angle at each pulse, and their rate must lie within
   :data:`TACHO_SPEED_TOLERANCE` of the sidecar's speed; a straight line through them (least squares)
   is the angle track, or a cubic when the pulses stray more than
@@ -30,7 +30,8 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from features.spectra import line_amplitudes
-from features.tsa import AngleTrack, tacho_pulse_index, tacho_pulse_times
+from features.tacho import tacho_pulse_index, tacho_pulse_times
+from features.tsa import AngleTrack
 from gearpit.errors import InputError, require
 
 TWO_PI = 2.0 * np.pi

@@ -32,7 +32,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline, PchipInterpolator
 from scipy.signal import fftconvolve
 
-from features.tsa import tacho_pulse_index, tacho_pulse_times
+from features.tacho import tacho_pulse_index, tacho_pulse_times
 from gearpit.errors import require
 
 TWO_PI = 2.0 * np.pi
@@ -72,7 +72,7 @@ def tacho_angle(tacho: np.ndarray, fs_hz: float, *, pulses_per_rev: int = 1, per
                 nominal_rpm: float | None = None) -> np.ndarray:
     """Pinion angle (rad) at every sample from a tachometer channel: pulse ``k`` at ``2 pi k per_rev /
     pulses_per_rev`` (``per_rev``: pinion revolutions per revolution of the tachometer's shaft; a missing pulse
-    skips a ``k``, a bounce or a spike is dropped: :func:`features.tsa.tacho_pulse_index`, its interval from
+    skips a ``k``, a bounce or a spike is dropped: :func:`features.tacho.tacho_pulse_index`, its interval from
     ``nominal_rpm`` of the pinion when given), a monotone cubic between pulses, the mean speed of the first and
     last revolution beyond them."""
     expected = None if nominal_rpm is None else 60.0 / nominal_rpm * per_rev / pulses_per_rev

@@ -1,5 +1,5 @@
 """A real tachometer's faults: noise on slow edges, a missing pulse, a spike between pulses, a wrong sidecar
-(features.tsa.tacho_pulse_times / tacho_pulse_index, compare.speed.speed_from_tacho). Source: the pulse train is
+(features.tacho.tacho_pulse_times / tacho_pulse_index, compare.speed.speed_from_tacho). Source: the pulse train is
 written here from a known shaft angle, so the true speed is known exactly."""
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from compare.speed import speed_from_tacho
-from features.tsa import tacho_pulse_index, tacho_pulse_times
+from features.tacho import tacho_pulse_index, tacho_pulse_times
 from gearpit.errors import InputError
 
 FS = 20000.0
