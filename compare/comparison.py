@@ -55,8 +55,8 @@ class Reference:
     speed: SpeedEstimate
     plan: Plan
     views: SignalViews
-    #: RMS of the measurement's content below every shaft order (its mean left out), over the RMS of the rest:
-    #: removed before every view (:func:`compare.spectra.below_shafts_removed`), reported
+    #: RMS of the measurement's content below every shaft order (its mean left out), over the RMS of the rest;
+    #: above :data:`BELOW_SHAFTS_REMOVED` that content is removed before every view (the plan's ``low_cut_hz``)
     below_shafts_ratio: float = 0.0
     #: whether the sensor channel is clipped (:func:`compare.quality.clipping`), reported
     clipping: dict = field(default_factory=dict)
