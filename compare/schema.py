@@ -11,35 +11,7 @@ version-1 ``error_db``) and ``noise_error_db`` beside it; candidates carry their
 """
 from __future__ import annotations
 
-_NUM = {"type": ["number", "null"]}
-_STR = {"type": ["string", "null"]}
-_ERRORS = {"type": "object", "required": ["total"], "additionalProperties": {"type": "number"}}
-
-_TRIAL = {"type": "object", "properties": {
-    "effect": {"type": "string"}, "motor_inertia_kg_m2": {"type": "number"},
-    "input_shaft_nm_per_rad": {"type": "number"},
-    "trial_amplitude_fraction": {"type": "number"}, "amplitude_fraction": _NUM,
-    "type": {"enum": ["amplitude", "frequency", "mixed", "none"]}, "balance": {"type": "number"},
-    "profile_scatter": _NUM, "harmonics": {"type": "integer"}}}
-_SIDEBAND_FIT = {
-    "type": ["object", "null"],
-    "description": "a claimed fluctuation whose sidebands read another modulation type than the measurement's: "
-                   "its refit on the sidebands (compare.sideband_fit): the measured and model types, the "
-                   "refined and the claimed frequency, the claim before, one entry per trial (effect x drive-train "
-                   "values: amplitude from the sideband profile's median, its scatter, its type), the chosen "
-                   "trial, the errors "
-                   "before and after, kept; set on the claim it produced (kept) or on the claim it left; null: "
-                   "not run",
-    "required": ["measured_type", "model_type", "frequency_hz", "trials", "kept"],
-    "properties": {"measured_type": {"type": "string"}, "model_type": {"type": "string"},
-                   "frequency_hz": {"type": "number"}, "claimed_frequency_hz": {"type": "number"},
-                   "claimed_before": {"type": "string"},
-                   "error_before_db": {"type": "number"}, "error_after_db": {"type": "number"},
-                   "trials": {"type": "array", "items": _TRIAL}, "kept": {"type": "boolean"},
-                   "chosen": {"type": "object", "description": "the trial compared: effect, its drive-train "
-                              "values, amplitude_fraction, the comparison's type, at_bound (drive-train values "
-                              "on the ladder's bounds)"},
-                   "elapsed_s": {"type": "number"}}}
+from compare.schema_attribution import ATTRIBUTION, ERRORS, NUM, STR
 
 SCHEMA = {
     "$schema": "https://json-schema.org/draft/2020-12/schema",
@@ -62,7 +34,7 @@ SCHEMA = {
                                                "description": "what the sensor measures (sidecar); a velocity or "
                                                               "displacement is differentiated to acceleration "
                                                               "(features.derivative) before every view"},
-                           "tacho": _STR, "fault": _STR,
+                           "tacho": STR, "fault": STR,
                            "speed_rpm": {"type": "number", "description": "refined mean pinion speed"},
                            "speed_rpm_nominal": {"type": "number"},
                            "speed_method": {"enum": ["tacho", "spectrum", "nominal"]},
@@ -95,7 +67,7 @@ SCHEMA = {
                                                        "limits": {"type": "array", "items": {"type": "number"},
                                                                   "minItems": 2, "maxItems": 2}}}}},
         "model": {"type": "object", "required": ["description", "sensor", "effects"],
-                  "properties": {"path": _STR, "description": {"type": "string"}, "sensor": {"type": "string"},
+                  "properties": {"path": STR, "description": {"type": "string"}, "sensor": {"type": "string"},
                                  "effects": {"type": "array", "items": {"type": "object", "required": ["name"]}}}},
         "gain_db": {"type": "number", "description": "fitted sensor gain, model -> measurement"},
         "calibration": {
@@ -104,7 +76,7 @@ SCHEMA = {
             "required": ["parameters", "sigma", "start", "error_before_db", "error_db"],
             "properties": {"parameters": {"type": "object", "additionalProperties": {"type": "number"},
                                           "description": "calibrated drive-train fields (SI)"},
-                           "sigma": {"type": "object", "additionalProperties": _NUM,
+                           "sigma": {"type": "object", "additionalProperties": NUM,
                                      "description": "1-sigma (SI), null: not identifiable"},
                            "start": {"type": "object", "additionalProperties": {"type": "number"}},
                            "error_before_db": {"type": "number", "description": "raw total error E at the start"},
@@ -117,10 +89,10 @@ SCHEMA = {
                                      "description": "views whose error the calibration minimises"},
                            "objective_before_db": {"type": "number"}, "objective_db": {"type": "number"}}},
         "noise_added_rms": {"type": "number", "description": "white noise added to the model to match the floor"},
-        "error_db": {**_ERRORS, "description": "the headline error: excess over the noise error, "
+        "error_db": {**ERRORS, "description": "the headline error: excess over the noise error, "
                                                 "sqrt(max(0, E_v^2 - N_v^2)) per view (compare.error, step 7)"},
-        "raw_error_db": {**_ERRORS, "description": "E: the weighted RMS of the residuals (compare.error, step 6)"},
-        "noise_error_db": {**_ERRORS, "description": "N: E between the model with independent noise draws at the "
+        "raw_error_db": {**ERRORS, "description": "E: the weighted RMS of the residuals (compare.error, step 6)"},
+        "noise_error_db": {**ERRORS, "description": "N: E between the model with independent noise draws at the "
                                                       "measured floor (0: no noise drawn)"},
         "locations": {
             "type": "array",
@@ -129,257 +101,21 @@ SCHEMA = {
                       "required": ["key", "view", "group", "label", "weight", "measured_db", "model_db", "residual_db"],
                       "properties": {"key": {"type": "string"},
                                      "view": {"enum": ["order", "band", "envelope", "tsa", "stats"]},
-                                     "group": {"type": "string"}, "label": {"type": "string"}, "freq_hz": _NUM,
+                                     "group": {"type": "string"}, "label": {"type": "string"}, "freq_hz": NUM,
                                      "weight": {"type": "number",
                                                 "description": "w_i of compare.error step 5: the group weight "
                                                                "times the reliability (line views)"},
-                                     "measured_db": _NUM, "model_db": _NUM,
-                                     "floor_db": _NUM, "residual_db": _NUM}}},
+                                     "measured_db": NUM, "model_db": NUM,
+                                     "floor_db": NUM, "residual_db": NUM}}},
         "disagreements": {
             "type": "array",
             "description": "ranked by |residual_db|",
             "items": {"type": "object", "required": ["key", "view", "label", "residual_db", "text"],
                       "properties": {"key": {"type": "string"}, "view": {"type": "string"}, "label": {"type": "string"},
                                      "residual_db": {"type": "number"}, "measured_db": {"type": "number"},
-                                     "model_db": {"type": "number"}, "freq_hz": _NUM, "weight": {"type": "number"},
+                                     "model_db": {"type": "number"}, "freq_hz": NUM, "weight": {"type": "number"},
                                      "text": {"type": "string"}}}},
-        "attribution": {
-            "type": ["object", "null"],
-            "required": ["candidates", "unexplained", "claimed", "elapsed_s", "n_simulations"],
-            "properties": {
-                "candidates": {"type": "array", "description": "best first (largest error reduction)",
-                               "items": {"type": "object",
-                                         "required": ["effect", "params", "sigma", "error_db", "baseline_error_db",
-                                                      "reduction", "claimed", "status"],
-                                         "properties": {"effect": {"type": "string"}, "signature": {"type": "string"},
-                                                        "params": {"type": "object"},
-                                                        "sigma": {"type": "object",
-                                                                  "additionalProperties": _NUM,
-                                                                  "description": "1-sigma, null: not identifiable"},
-                                                        "error_db": _NUM, "baseline_error_db": {"type": "number"},
-                                                        "reduction": {"type": "number"},
-                                                        "view_error_db": {"type": "object"},
-                                                        "window": {"type": "string"},
-                                                        "n_evaluations": {"type": "integer"},
-                                                        "explains": {"type": "array", "items": {"type": "string"}},
-                                                        "claimed": {"type": "boolean"},
-                                                        "status": {"type": "string"},
-                                                        "nuisance": {"type": "object",
-                                                                     "description": "drive-train values of the "
-                                                                                    "fit (calibrated runs)"},
-                                                        "raw_error_db": _NUM,
-                                                        "raw_baseline_error_db": _NUM,
-                                                        "noise_error_db": {"type": "number"},
-                                                        "interval": {"type": "object",
-                                                                     "additionalProperties": {
-                                                                         "type": "array", "items": _NUM,
-                                                                         "minItems": 2, "maxItems": 2},
-                                                                     "description": "a chaotic record's fit "
-                                                                     "(compare.chaos): per parameter [low, high] "
-                                                                     "between the nearest values the measurement "
-                                                                     "rejects, null: not bounded on that side; "
-                                                                     "empty for a regular record"},
-                                                        "at_bound": {"type": "object",
-                                                                     "additionalProperties": {
-                                                                         "enum": ["lower", "upper"]},
-                                                                     "description": "fitted parameters on a "
-                                                                     "bound of their search"},
-                                                        "pinned": {"type": "array", "items": {"type": "string"},
-                                                                   "description": "those of at_bound whose error "
-                                                                   "rises off the bound (the fit would go past "
-                                                                   "it); among rivals one with none pinned is "
-                                                                   "claimed first"},
-                                                        "response": {
-                                                            "type": "object",
-                                                            "properties": {
-                                                                "frequency_hz": {"type": "number"},
-                                                                "speed_pinion_amplitude_fraction": {"type": "number"},
-                                                                "mesh_force_amplitude_fraction": {"type": "number"},
-                                                                "reference_amplitude_fraction": {"type": "number"},
-                                                                "mesh_force_min_fraction": {
-                                                                    "type": "number",
-                                                                    "description": "the mesh force's least value "
-                                                                    "over its mean; below 0 the mesh pulls (the "
-                                                                    "teeth would separate: outside the model "
-                                                                    "without backlash)"},
-                                                                "contact": {
-                                                                    "type": "string",
-                                                                    "enum": ["kept", "lost", "tension"],
-                                                                    "description": "compare.response.contact_state"},
-                                                                "shaft_order": {
-                                                                    "type": ["object", "null"],
-                                                                    "description": "the shaft order the "
-                                                                    "frequency sits on within the record's "
-                                                                    "resolution (shaft, order), where a "
-                                                                    "once-per-revolution error makes the same "
-                                                                    "sidebands; null: none"},
-                                                                "modulation": {
-                                                                    "type": "object",
-                                                                    "description": "compare.modulation: the "
-                                                                    "sidebands' modulation type at the frequency "
-                                                                    "in the measurement and in the model with "
-                                                                    "the candidate",
-                                                                    "additionalProperties": {
-                                                                        "type": "object",
-                                                                        "required": ["type", "read"],
-                                                                        "properties": {
-                                                                            "type": {"enum": [
-                                                                                "amplitude", "frequency",
-                                                                                "mixed", "none"]},
-                                                                            "balance": {"type": "number"},
-                                                                            "amplitude": {"type": "integer"},
-                                                                            "frequency": {"type": "integer"},
-                                                                            "read": {"type": "integer"},
-                                                                            "cos_arg_q": {
-                                                                                "type": "array",
-                                                                                "items": _NUM}}}}},
-                                                            "description": "a fitted fluctuation (hook 5; "
-                                                            "compare.response): the amplitude of the pinion speed "
-                                                            "and of the mesh force at its frequency in the model, "
-                                                            "over their means, what a rig's encoder or torque meter "
-                                                            "would show (the fitted amplitude_fraction is the "
-                                                            "drive's, before the drive train); empty otherwise"},
-                                                        "sideband_fit": _SIDEBAND_FIT,
-                                                        "shaft_lock": {
-                                                            "type": "object",
-                                                            "description": "a fluctuation fitted onto a shaft "
-                                                            "order {kind: fluctuation, shaft, order}, or a "
-                                                            "once-per-revolution error {kind: revolution, shafts}; "
-                                                            "empty otherwise (compare.response.mark_shaft_locks)",
-                                                            "properties": {
-                                                                "kind": {"enum": ["fluctuation", "revolution"]},
-                                                                "shaft": {"enum": ["pinion", "wheel"]},
-                                                                "order": {"type": "integer"},
-                                                                "shafts": {"type": "array", "items": {
-                                                                    "enum": ["pinion", "wheel"]}}}},
-                                                        "path_regime": {
-                                                            "type": "object",
-                                                            "description": "a fitted housing mode: regime "
-                                                            "resonant (among the mesh harmonics), mass_line (below "
-                                                            "them all: only bounded above by edge_hz, damping not "
-                                                            "identified) or stiffness_line (above them all: bounded "
-                                                            "below by edge_hz); deviation_db from that asymptote; "
-                                                            "empty otherwise (compare.path_regime)",
-                                                            "properties": {
-                                                                "regime": {"enum": ["resonant", "mass_line",
-                                                                                    "stiffness_line"]},
-                                                                "housing_frequency_hz": {"type": "number"},
-                                                                "housing_damping_ratio": {"type": "number"},
-                                                                "mesh_hz": {"type": "number"},
-                                                                "top_harmonic_hz": {"type": "number"},
-                                                                "deviation_db": {"type": "number"},
-                                                                "edge_hz": {"type": ["number", "null"]},
-                                                                "asymptotes": {"type": "object",
-                                                                               "additionalProperties": _NUM,
-                                                                               "description": "excess error (dB) "
-                                                                               "with the mode moved onto each "
-                                                                               "asymptote (mass_line, "
-                                                                               "stiffness_line)"},
-                                                                "fitted_excess_db": _NUM,
-                                                                "as_well": {"type": "array", "items": {
-                                                                    "enum": ["mass_line", "stiffness_line"]},
-                                                                    "description": "asymptotes that take 90 % "
-                                                                    "of the fit's fall of the error: the mode is "
-                                                                    "not located on that side"}}},
-                                                        "claimed_over": {
-                                                            "type": ["object", "null"],
-                                                            "required": ["effect", "rule"],
-                                                            "properties": {"effect": {"type": "string"},
-                                                                           "rule": {"enum": ["interior",
-                                                                                             "shaft_locked"]}},
-                                                            "description": "the candidate that ranked first when a "
-                                                            "rule claimed this one instead: interior (that one's fit "
-                                                            "pinned on a bound), shaft_locked (that one a fluctuation "
-                                                            "on this shaft's order); null otherwise"},
-                                                        "drivetrain_intervals": {
-                                                            "type": "array",
-                                                            "description": "a chaotic record's ladders per drive "
-                                                            "train (compare.chaos, Nuisances): the model's first, "
-                                                            "then the one fitted with the candidate in; interval is "
-                                                            "the hull of the model's and those not rejected; empty "
-                                                            "for a regular record",
-                                                            "items": {"type": "object",
-                                                                      "required": ["drivetrain", "best",
-                                                                                   "best_error_db", "interval",
-                                                                                   "rejected",
-                                                                                   "realisation_scatter_db"],
-                                                                      "properties": {
-                                                                          "drivetrain": {"type": "object",
-                                                                                         "additionalProperties":
-                                                                                             {"type": "number"}},
-                                                                          "best": {"type": "object",
-                                                                                   "additionalProperties":
-                                                                                       {"type": "number"}},
-                                                                          "best_error_db": {
-                                                                              "type": "object",
-                                                                              "additionalProperties":
-                                                                                  {"type": "number"}},
-                                                                          "interval": {
-                                                                              "type": "object",
-                                                                              "description": "null: every value "
-                                                                              "at this drive train fits worse than "
-                                                                              "the best at another (rejected)",
-                                                                              "additionalProperties": {
-                                                                                  "type": ["array", "null"],
-                                                                                  "items": _NUM,
-                                                                                  "minItems": 2, "maxItems": 2}},
-                                                                          "rejected": {
-                                                                              "type": "object",
-                                                                              "description": "per parameter: every "
-                                                                              "value at this drive train fits worse "
-                                                                              "than the best at the other",
-                                                                              "additionalProperties":
-                                                                                  {"type": "boolean"}},
-                                                                          "realisation_scatter_db": {
-                                                                              "type": "number"}}}},
-                                                        "realisation_scatter_db": {
-                                                            "type": ["number", "null"],
-                                                            "description": "1-sigma of the error over "
-                                                                           "realisations of a chaotic record; "
-                                                                           "null: the record is regular"},
-                                                        "model_error_db": {
-                                                            "type": ["number", "null"],
-                                                            "description": "a time-stepped candidate: the excess "
-                                                                           "error of the model as compared, which "
-                                                                           "a claim must lower by 30 % too; null: "
-                                                                           "not checked (periodic candidates)"},
-                                                        "joint_refit": {
-                                                            "type": ["object", "null"],
-                                                            "description": "the claimed candidate of a calibrated "
-                                                            "pass: its joint refit with the nuisances over the whole "
-                                                            "box (compare.joint_refit): samples, starts, seed, kept, "
-                                                            "chosen (current / refined / searched), error_before_db, "
-                                                            "error_after_db, params_before, nuisance_before, "
-                                                            "n_simulations, elapsed_s; the leader of a calibrated "
-                                                            "pass that claimed nothing "
-                                                            "(compare.joint_refit.reexamine_leader) also: reexamined "
-                                                            "(true), baseline_before_db, baseline_refitted_db, "
-                                                            "baseline_chosen, reduction_before, reduction_after, "
-                                                            "claimed; null: not run"}}}},
-                "unexplained": {"type": "array", "items": {"type": "object", "required": ["key", "text"]}},
-                "claimed": {"type": "array", "items": {"type": "string"}},
-                "rivals": {"type": "array", "items": {"type": "string"},
-                           "description": "effects that pass the claim rule within 5 % of the claimed one's "
-                                          "reduction: these views cannot tell them apart"},
-                "claim_order": {"type": ["string", "null"],
-                                "description": "why the claim is not the candidate that ranked first (a rule of "
-                                               "compare.candidates: interior_rival, shaft_locked_twin); null when "
-                                               "it is"},
-                "elapsed_s": {"type": "number"}, "n_simulations": {"type": "integer"},
-                "group_seconds": {"type": "object"},
-                "resolution": {"type": ["object", "null"],
-                               "description": "what the measurement's further channels (sidecar secondary) said "
-                                              "about the claimed effect and its rivals (compare.channels); null "
-                                              "without further channels or rivals",
-                               "properties": {"channels": {"type": "object"},
-                                              "baseline_error_db": {"type": "object"},
-                                              "error_db": {"type": "object",
-                                                           "description": "effect -> column -> excess error (dB)"},
-                                              "reduction": {"type": "object"},
-                                              "claimed": {"type": ["string", "null"]},
-                                              "before": {"type": "string"},
-                                              "rivals": {"type": "array", "items": {"type": "string"}},
-                                              "note": {"type": "string"}}}}},
+        "attribution": ATTRIBUTION,
         "pair_check": {
             "type": "object",
             "description": "the measurement against the sidecar's gear pair (compare.pair_check): whether a mesh "
@@ -396,7 +132,7 @@ SCHEMA = {
                            "z_measured": {"type": ["integer", "null"],
                                           "description": "the count of the strongest sideband comb (null: no mesh "
                                                          "line to read it around)"},
-                           "score_db": _NUM,
+                           "score_db": NUM,
                            "sidecar_score_db": {"type": ["object", "null"],
                                                 "description": "the comb contrast of each sidecar count (within "
                                                                "the record's resolution)"},
@@ -426,7 +162,7 @@ SCHEMA = {
                                                      "pass's error by explained_reduction, or those that did have an "
                                                      "amount the record does not bound (an open interval); absent "
                                                      "when it did not calibrate"},
-                           "as_written_error_db": _NUM,
+                           "as_written_error_db": NUM,
                            "as_written_best": {"type": ["object", "null"],
                                                "description": "the first pass's best candidate: effect, reduction, "
                                                               "claimed (whenever \"auto\" calibrated)"},
@@ -438,7 +174,7 @@ SCHEMA = {
                                               "first pass is reported and these calibrated values and that claim "
                                               "were not used",
                                "required": ["error_db", "as_written_error_db", "parameters"],
-                               "properties": {"error_db": _NUM, "as_written_error_db": _NUM,
+                               "properties": {"error_db": NUM, "as_written_error_db": NUM,
                                               "claimed": {"type": ["string", "null"]},
                                               "parameters": {"type": "object"}}},
                            "settled": {
@@ -452,11 +188,11 @@ SCHEMA = {
                                          "required": ["effect", "before", "after", "error_before_db",
                                                       "error_after_db", "kept"],
                                          "properties": {"effect": {"type": "string"}, "before": {"type": "object"},
-                                                        "after": {"type": "object"}, "error_before_db": _NUM,
-                                                        "error_after_db": _NUM, "kept": {"type": "boolean"}}}}}},
+                                                        "after": {"type": "object"}, "error_before_db": NUM,
+                                                        "error_after_db": NUM, "kept": {"type": "boolean"}}}}}},
         "ledger": {"type": "array",
                    "items": {"type": "object", "required": ["run", "model", "error_db"],
                              "properties": {"run": {"type": "integer"}, "model": {"type": "string"},
-                                            "error_db": _ERRORS}}},
+                                            "error_db": ERRORS}}},
     },
 }
