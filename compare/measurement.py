@@ -340,7 +340,18 @@ def load_measurement(path: str | Path, sidecar: Sidecar | str | Path | None = No
     p = Path(path)
     require(p.is_file(), "measurement", str(p), "an existing file")
     if not isinstance(sidecar, Sidecar):
-        sidecar = read_sidecar(sidecar if sidecar is not None else find_sidecar(p))
+        if sidecar is None:
+            try:
+                sidecar = find_sidecar(p)
+            except InputError as exc:     # none: leave one to fill in (compare.sidecar_template)
+                from compare.sidecar_template import write_template
+
+                made = write_template(p)
+                if made is None:
+                    raise
+                raise InputError(exc.field, exc.value, f"{exc.allowed}; a template with this file's channels was "
+                                 f"written: {made} (fill it in, save it as {p.stem}.toml)") from None
+        sidecar = read_sidecar(sidecar)
     named_by_sidecar = sidecar.channels is not None and sidecar.time_column in sidecar.channels
     rec = read_record(p, sidecar.format, time_column=None if named_by_sidecar else sidecar.time_column,
                       variable=sidecar.variable)
