@@ -28,6 +28,7 @@ is the same draw for every candidate (common random numbers).
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 
@@ -56,10 +57,14 @@ class Reference:
     plan: Plan
     views: SignalViews
     #: RMS of the measurement's content below every shaft order (its mean left out), over the RMS of the rest;
-    #: above :data:`BELOW_SHAFTS_REMOVED` that content is removed before every view (the plan's ``low_cut_hz``)
+    #: above :data:`BELOW_SHAFTS_REMOVED` that content is removed before every view (the plan's ``low_cut_hz``);
+    #: 0 for a window of a record (it follows the whole record's decision)
     below_shafts_ratio: float = 0.0
-    #: whether the sensor channel is clipped (:func:`compare.quality.clipping`), reported
-    clipping: dict = field(default_factory=dict)
+    @cached_property
+    def clipping(self) -> dict:
+        """Whether the sensor channel is clipped (:func:`compare.quality.clipping`), reported; computed when asked
+        (only the comparison's own reference is reported, not its windows or further channels)."""
+        return clipping(self.x)
 
     @property
     def fs_hz(self) -> float:
@@ -93,14 +98,15 @@ def prepare_reference(measurement: Measurement, *, duration_s: float | None = No
     track = speed.track if duration_s is None else _crop_track(speed, len(x), measurement.fs_hz)
     plan = make_plan(x, measurement.fs_hz, track, measurement.pair, lines_from=lines_from)
     x = np.asarray(x, float)
-    low, _ = below_shafts_share(x, measurement.fs_hz, low_cut_hz(plan))
+    low = 0.0
     if lines_from is not None:      # a window of a measurement: as the whole record was decided
         plan = replace(plan, low_cut_hz=float(lines_from.low_cut_hz))
-    elif low > BELOW_SHAFTS_REMOVED:
-        plan = replace(plan, low_cut_hz=low_cut_hz(plan))
+    else:
+        low, _ = below_shafts_share(x, measurement.fs_hz, low_cut_hz(plan))
+        if low > BELOW_SHAFTS_REMOVED:
+            plan = replace(plan, low_cut_hz=low_cut_hz(plan))
     views = analyse(x, measurement.fs_hz, track, plan, keep_curves=True)
-    return Reference(measurement=measurement, x=x, speed=speed, plan=plan, views=views, below_shafts_ratio=low,
-                     clipping=clipping(x))
+    return Reference(measurement=measurement, x=x, speed=speed, plan=plan, views=views, below_shafts_ratio=low)
 
 
 #: content below every shaft order (:func:`compare.spectra.low_cut_hz`) whose RMS exceeds this fraction of the
