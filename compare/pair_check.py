@@ -96,7 +96,6 @@ def check_pair(measurement, speed) -> dict:
     z1, z2 = int(pair.pinion.teeth), int(pair.wheel.teeth)
     fs = measurement.fs_hz
     x = measurement.signal
-    n = measurement.n_samples
     fr_cps = speed.fr_pinion_hz / fs
     logp, n_fft = log_power(np.asarray(x, dtype=float), PAD)
     out = {"mesh_hz": float(z1 * fr_cps * fs), "mesh_family_db": mesh_line_db(logp, n_fft, z1 * fr_cps),
@@ -111,11 +110,20 @@ def check_pair(measurement, speed) -> dict:
         # no mesh line where the comparison reads it: the sideband comb would be read around nothing
         out.update({**blank, "questioned": True})
         return out
+    family = sideband_family(x, fm_cps, z1, z2)
+    out.update({**(blank if family is None else family), "questioned": False})
+    return out
+
+
+def sideband_family(x: np.ndarray, fm_cps: float, z1: int, z2: int) -> dict | None:
+    """Check 2 of the module docstring around a mesh line at ``fm_cps`` (cycles per sample): ``z_measured``,
+    ``score_db``, ``sidecar_score_db``, ``agrees``, ``other_family`` (:func:`check_pair`); None when no harmonic
+    with its sidebands lies below Nyquist or the record is too short to resolve them."""
+    n = len(x)
     try:
         scores = tooth_count_scores(x, fm_cps, z_range=(6, max(200, 2 * max(z1, z2))), n_sidebands=N_SIDEBANDS)
-    except InputError:      # no harmonic with its sidebands below Nyquist, or a record too short to resolve them
-        out.update({**blank, "questioned": False})
-        return out
+    except InputError:
+        return None
     best = max(scores, key=scores.get)
     near = {}
     agrees = False
@@ -123,40 +131,53 @@ def check_pair(measurement, speed) -> dict:
         tol = resolution_counts(z, n * fm_cps / z)
         window = [scores[k] for k in range(z - tol, z + tol + 1) if k in scores]
         near[name] = max(window) if window else None
-        agrees = agrees or abs(best - z) <= tol
+        # a comb spaced k shaft orders (z / k teeth, k an integer) is that shaft's orders too when that shaft's own
+        # comb is a clear family: a local fault puts every order of its gear into the record, and the comb of every
+        # k-th one then scores as high (a broken wheel tooth of the 29/100 rig: 20 "teeth", 33 dB, against 27.6 dB
+        # at 100). Exactly: a comb of 29 for a 60-tooth wheel is no wheel's (the comb of 60 at half a 29-tooth
+        # gear's spacing scores about half of it)
+        agrees = agrees or abs(best - z) <= tol or (
+            near[name] is not None and near[name] >= DECISIVE_DB and best < z and z % best == 0)
     lead = scores[best] - max((v for v in near.values() if v is not None), default=-math.inf)
     other = (not agrees) and scores[best] >= DECISIVE_DB and lead >= MARGIN_DB
-    out.update({"z_measured": int(best), "score_db": float(scores[best]),
-                "sidecar_score_db": {k: (None if v is None else float(v)) for k, v in near.items()},
-                "agrees": bool(agrees), "other_family": bool(other), "questioned": False})
-    return out
+    return {"z_measured": int(best), "score_db": float(scores[best]),
+            "sidecar_score_db": {k: (None if v is None else float(v)) for k, v in near.items()},
+            "agrees": bool(agrees), "other_family": bool(other)}
 
 
-def mesh_family_db(logp: np.ndarray, n_fft: int, f_cps: float, *, n_harmonics: int = 10) -> float:
+def mesh_family_db(logp: np.ndarray, n_fft: int, f_cps: float, *, n_harmonics: int = 10, odd: bool = False,
+                   quantile: float = QUANTILE) -> float:
     """How far a harmonic family at ``f_cps`` stands out (dB): the :data:`QUANTILE` over its harmonics below 0.45
     cycles per sample (at most ``n_harmonics``) of the peak within +/- ``PAD`` padded bins (one bin of the record)
     over the median of the spectrum within +/- ``f_cps / 4`` (the local floor, sidebands included). A quantile,
     not the mean: a family at a simple fraction of the mesh (7/4 fm) hits a few strong mesh lines and misses the
-    rest; not the median: a quiet pair (helical, with tip relief) has half its harmonics under the sensor noise."""
+    rest; not the median: a quiet pair (helical, with tip relief) has half its harmonics under the sensor noise.
+    ``odd``: its odd harmonics only (1, 3, 5, ...; ``n_harmonics`` of them): a family at half the mesh frequency hits
+    the mesh lines with its even harmonics alone, so it stands out on them, not on its odd ones
+    (:func:`compare.speed.spectrum_speed`); ``quantile``: another quantile (the widened speed search asks for the
+    median: a family at ``p/q`` of the mesh frequency hits every ``q``-th harmonic, and 3 of 10 lift the 0.75
+    quantile)."""
     db = 10.0 / np.log(10.0)
     vals = []
     half = max(PAD, int(0.25 * f_cps * n_fft))
-    for m in range(1, n_harmonics + 1):
+    for m in range(1, 2 * n_harmonics, 2) if odd else range(1, n_harmonics + 1):
         c = int(round(m * f_cps * n_fft))
         if m * f_cps >= 0.45 or c + half >= logp.size:
             break
         vals.append(np.max(logp[c - PAD:c + PAD + 1]) - np.median(logp[max(c - half, 0):c + half + 1]))
-    return float(db * np.quantile(vals, QUANTILE)) if vals else -math.inf
+    return float(db * np.quantile(vals, quantile)) if vals else -math.inf
 
 
-def mesh_line_db(logp: np.ndarray, n_fft: int, f_cps: float) -> float:
+def mesh_line_db(logp: np.ndarray, n_fft: int, f_cps: float, *, odd: bool = False,
+                 quantile: float = QUANTILE) -> float:
     """How much more a harmonic family at ``f_cps`` stands out than families just beside it (dB):
     :func:`mesh_family_db` at ``f_cps`` minus its median at ``f_cps (1 + d)`` for the offsets :data:`OFFSETS`.
     A mesh line is a sharp maximum of the family score; at a frequency that is no line the score is whatever
     noise, sidebands and stray coincidences give, and about the same a few percent away (self-normalising: no
-    level of the record enters)."""
-    here = mesh_family_db(logp, n_fft, f_cps)
-    beside = [mesh_family_db(logp, n_fft, f_cps * (1.0 + d)) for d in OFFSETS if f_cps * (1.0 + d) < 0.45]
+    level of the record enters). ``odd``, ``quantile``: as :func:`mesh_family_db`'s."""
+    kw = dict(odd=odd, quantile=quantile)
+    here = mesh_family_db(logp, n_fft, f_cps, **kw)
+    beside = [mesh_family_db(logp, n_fft, f_cps * (1.0 + d), **kw) for d in OFFSETS if f_cps * (1.0 + d) < 0.45]
     return float(here - np.median(beside)) if beside else -math.inf
 
 

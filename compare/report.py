@@ -62,7 +62,8 @@ def document(comparison, attribution=None, ledger_rows=(), *, measurement_path: 
                         "fault": m.fault,
                         "speed_rpm_nominal": m.speed_rpm, "speed_rpm": ref.speed.speed_rpm,
                         "speed_method": ref.speed.method, "speed_drift_rad": _num(ref.speed.drift_rad),
-                        "speed_tracked": bool(ref.speed.tracked), "torque_nm": m.torque_nm, "pair": m.pair.to_dict(),
+                        "speed_tracked": bool(ref.speed.tracked),
+                        "speed_search_fraction": _num(ref.speed.search_fraction), "torque_nm": m.torque_nm, "pair": m.pair.to_dict(),
                         "low_cut_hz": float(plan.low_cut_hz), "below_shafts_ratio": float(ref.below_shafts_ratio),
                         "clipping": dict(ref.clipping)},
         "model": {"path": model_path, "description": comparison.model.describe(), "sensor": comparison.model.sensor,
@@ -135,13 +136,18 @@ def _pair_html(check: dict | None) -> list[str]:
 
 
 def _below_shafts_html(ref) -> list[str]:
-    """What the measurement's own recording says (compare.quality: clipping) and the content below every shaft
-    order that was removed (compare.comparison.below_shafts_message)."""
+    """What the measurement's own recording says (compare.speed: a sidecar speed further off than the first search;
+    compare.quality: clipping) and the content below every shaft order that was removed
+    (compare.comparison.below_shafts_message)."""
     from compare.comparison import below_shafts_message
 
     from compare.quality import clipping_message
 
+    from compare.speed import speed_message
+
     out = []
+    if (msg := speed_message(ref.speed)) is not None:
+        out.append(f"<p class='flag'><b>Speed:</b> {html.escape(msg)}.</p>")
     if (msg := clipping_message(ref.clipping, ref.measurement.sensor)) is not None:
         out.append(f"<p class='flag'><b>Clipped:</b> {html.escape(msg)}.</p>")
     if (msg := below_shafts_message(ref)) is not None:

@@ -45,6 +45,12 @@ SCHEMA = {
                                                               "measured (tachometer, or no two clear harmonics)"},
                            "speed_tracked": {"type": "boolean",
                                              "description": "the measurement's views follow that drift"},
+                           "speed_search_fraction": {"type": ["number", "null"],
+                                                     "description": "without a tachometer: the half-width (fraction "
+                                                                    "of speed_rpm_nominal) of the search that found "
+                                                                    "the mesh line: 0.05, or 0.25 when none stood "
+                                                                    "out within 0.05 (compare.speed.spectrum_speed); "
+                                                                    "null: tachometer"},
                            "torque_nm": {"type": "number"}, "pair": {"type": "object"},
                            "low_cut_hz": {"type": "number",
                                           "description": "content below this frequency (half the slower shaft's "

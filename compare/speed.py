@@ -12,7 +12,14 @@
   ``S(f) = sum_m |X(m z1 f)|^2`` over the mesh harmonics below 0.45 fs (at most 10),
   searched within ``+/- search_fraction`` of the nominal speed, first on a
   zero-padded FFT, then by a bounded scalar search on the exact windowed DFT
-  (no scalloping). The track is then a constant speed, unless the mesh phase
+  (no scalloping). The search spans :data:`SEARCH_FRACTION` of the sidecar's speed; when no mesh line is
+  where it ends (the maximum on the search's edge, or a family that fails :func:`widened_speed`'s tests: a
+  sidecar holding a set point or a nameplate speed further off), it is widened to
+  :data:`WIDE_SEARCH_FRACTION`, and a line is taken from it only where the median of its harmonics and of its
+  odd ones stands out of the families beside it (a family at ``p/q`` of the mesh frequency hits every ``q``-th
+  mesh harmonic), it is the strongest family within :data:`NEIGHBOURS` pinion orders, and its sidebands are no
+  other gear's; otherwise the first search's answer stays and the pair check reports what it finds
+  (:func:`spectrum_speed`). The track is then a constant speed, unless the mesh phase
   drifts from it by more than :data:`models.order_tracking.TRACK_MIN_RAD`
   slower than about half the wheel's rotation (:func:`drift_track`): that drift
   is followed, as the tachometer's track follows it.
@@ -45,6 +52,23 @@ DRIFT_LINE_DB = 20.0
 #: a tachometer's speed may differ from the sidecar's nominal one by this fraction; more is a wrong sidecar
 #: (pulses per revolution, shaft) and is refused
 TACHO_SPEED_TOLERANCE = 0.25
+#: without a tachometer the speed is searched within this fraction of the sidecar's speed ...
+SEARCH_FRACTION = 0.05
+#: ... and within this one when the first search finds no mesh line that stands out (:func:`spectrum_speed`)
+WIDE_SEARCH_FRACTION = 0.25
+#: a line of the widened search must stand out from the families beside it by this much (dB) on the median of
+#: its odd harmonics (:func:`compare.pair_check.mesh_line_db` with ``odd``): half of the all-harmonics threshold,
+#: since a quiet pair's odd harmonics are as weak as its even ones, while a family at half the mesh frequency has
+#: no line on its odd harmonics at all (measured: -2 to 0 dB; the true mesh lines 40-53 dB)
+ODD_LINE_DB = 5.0
+#: the widened search ranks this many local maxima of its harmonic sum by how far their family stands out
+N_PEAKS = 8
+#: a line of the speed search must be the strongest within this many pinion orders on ...
+NEIGHBOURS = 2.5
+#: ... at least this share of its harmonics (:func:`local_maximum_share`)
+LOCAL_MAXIMUM_SHARE = 0.6
+#: a maximum within this fraction of the search's half-width from its edge is on the edge
+EDGE_FRACTION = 0.95
 
 
 @dataclass(frozen=True, eq=False)
@@ -70,6 +94,9 @@ class SpeedEstimate:
     #: speed (:func:`drift_track`), and whether the track follows it; None when not measured
     drift_rad: float | None = None
     tracked: bool = False
+    #: without a tachometer: the half-width (fraction of the nominal speed) of the search that found the speed
+    #: (:data:`SEARCH_FRACTION`, or :data:`WIDE_SEARCH_FRACTION` when the first found no mesh line); None: tacho
+    search_fraction: float | None = None
 
     @property
     def fr_pinion_hz(self) -> float:
@@ -114,35 +141,175 @@ def speed_from_tacho(tacho: np.ndarray, fs_hz: float, *, z_pinion: int, z_wheel:
 def speed_from_spectrum(x: np.ndarray, fs_hz: float, *, z_pinion: int, nominal_rpm: float,
                         search_fraction: float = 0.05, n_harmonics: int = 10) -> SpeedEstimate:
     """Mean pinion speed from the mesh harmonics (module docstring); constant-speed track."""
+    a, harm, maxima = _comb_maxima(x, fs_hz, z_pinion * nominal_rpm / 60.0, search_fraction, n_harmonics, 1)
+    rpm = 60.0 * _refined(a, fs_hz, harm, maxima[0]) / z_pinion
+    return SpeedEstimate(rpm, nominal_rpm, "spectrum", constant_track(a.size, fs_hz, rpm / 60.0))
+
+
+def _comb_maxima(x: np.ndarray, fs_hz: float, fm0: float, fraction: float, n_harmonics: int,
+                 n_maxima: int) -> tuple[np.ndarray, list[int], list[float]]:
+    """``(record without its mean, harmonics used, mesh frequencies)``: the ``n_maxima`` highest local maxima of the
+    harmonic sum within ``fm0 (1 +/- fraction)`` on a 4-times zero-padded FFT, highest first."""
     a = np.asarray(x, float) - np.mean(x)
     n = a.size
-    fm0 = z_pinion * nominal_rpm / 60.0
-    harm = [m for m in range(1, n_harmonics + 1) if m * fm0 * (1 + search_fraction) < 0.45 * fs_hz]
-    require(harm, "speed_rpm", nominal_rpm, f"a mesh frequency below 0.45 fs ({0.45 * fs_hz:g} Hz)")
+    harm = [m for m in range(1, n_harmonics + 1) if m * fm0 * (1 + fraction) < 0.45 * fs_hz]
+    require(harm, "speed_rpm", 60.0 * fm0, f"a mesh frequency below 0.45 fs ({0.45 * fs_hz:g} Hz)")
     pad = 4
-    w = np.hanning(n)
-    spec = np.abs(np.fft.rfft(a * w, n=pad * n)) ** 2
+    spec = np.abs(np.fft.rfft(a * np.hanning(n), n=pad * n)) ** 2
     df = fs_hz / (pad * n)
-    lo, hi = fm0 * (1 - search_fraction), fm0 * (1 + search_fraction)
-    cand = np.arange(lo, hi, df / 2)
+    cand = np.arange(fm0 * (1 - fraction), fm0 * (1 + fraction), df / 2)
     score = np.zeros(cand.size)
     for m in harm:
         score += np.interp(m * cand, np.arange(spec.size) * df, spec) / max(np.max(spec), 1e-300)
-    f0 = float(cand[int(np.argmax(score))])
-    bin_hz = fs_hz / n
+    best = int(np.argmax(score))
+    if n_maxima <= 1:
+        return a, harm, [float(cand[best])]
+    peaks = np.flatnonzero((score[1:-1] >= score[:-2]) & (score[1:-1] > score[2:])) + 1
+    peaks = peaks[np.argsort(score[peaks])[::-1][:n_maxima]]
+    return a, harm, [float(cand[i]) for i in peaks] or [float(cand[best])]
+
+
+def _refined(a: np.ndarray, fs_hz: float, harm: list[int], f0: float) -> float:
+    """The mesh frequency within one bin of ``f0`` that maximises the harmonic sum on the exact windowed DFT."""
+    bin_hz = fs_hz / a.size
 
     def neg(f):
         return -float(np.sum(line_amplitudes(a, fs_hz, [m * f for m in harm]) ** 2))
 
     res = minimize_scalar(neg, bounds=(f0 - bin_hz, f0 + bin_hz), method="bounded",
                           options={"xatol": 1e-4 * bin_hz})
-    fm = float(res.x)
-    rpm = 60.0 * fm / z_pinion
-    return SpeedEstimate(rpm, nominal_rpm, "spectrum", constant_track(n, fs_hz, rpm / 60.0))
+    return float(res.x)
 
 
-def refine_speed(measurement, *, search_fraction: float = 0.05) -> SpeedEstimate:
-    """Refined speed of a :class:`compare.measurement.Measurement` (tacho if it has one, else spectrum)."""
+def mesh_line_stands_out(x: np.ndarray, fs_hz: float, fm_hz: float) -> tuple[float, float, float]:
+    """``(all_db, median_db, odd_db)``: how far the harmonic family at ``fm_hz`` stands out of the families beside
+    it (:func:`compare.pair_check.mesh_line_db`): on all its harmonics as the pair check reads it, on their median,
+    and on its odd ones (their median)."""
+    from compare.pair_check import PAD, mesh_line_db
+    from models.unknown_rate import log_power
+
+    logp, n_fft = log_power(np.asarray(x, dtype=float), PAD)
+    f = fm_hz / fs_hz
+    return (mesh_line_db(logp, n_fft, f), mesh_line_db(logp, n_fft, f, quantile=0.5),
+            mesh_line_db(logp, n_fft, f, odd=True, quantile=0.5))
+
+
+def spectrum_speed(x: np.ndarray, fs_hz: float, *, z_pinion: int, z_wheel: int, nominal_rpm: float) -> SpeedEstimate:
+    """Mean pinion speed from the mesh harmonics, searched within :data:`SEARCH_FRACTION` of ``nominal_rpm`` and, when
+    no mesh line stands out there, within :data:`WIDE_SEARCH_FRACTION` (module docstring). The estimate's
+    ``search_fraction`` says which search found it.
+
+    The first search's line must pass the same tests as the widened one's, except the odd harmonics (a quiet
+    pair's): a record with a local fault holds every order of its shaft, and within +/- 5 % of a sidecar a few
+    percent off lie families of them that stand out (a broken wheel tooth of the 29/100 rig at 920 rpm for 1000:
+    95 wheel orders); when the widened search finds no line either, the first search's answer stays.
+
+    Measured (``tests/test_compare_speed_search.py``; sidecars 0.70-1.30 of the true speed in steps of 0.02 on
+    gearpit's spur rig with a pitted or broken pinion tooth, a broken wheel tooth or an eccentric pinion, and a
+    helical rig with a broken pinion tooth): every sidecar within 18 % of the true speed is read to 0.1 %, none
+    further off is read as another speed; a sidecar naming a 17-tooth pinion for the 29-tooth rig keeps the first
+    search's answer and is questioned (the family at half the mesh frequency stands out by ~0 dB on its odd
+    harmonics)."""
+    kw = dict(z_pinion=z_pinion, nominal_rpm=nominal_rpm)
+    est = speed_from_spectrum(x, fs_hz, search_fraction=SEARCH_FRACTION, **kw)
+    est = SpeedEstimate(est.speed_rpm, est.nominal_rpm, est.method, est.track, search_fraction=SEARCH_FRACTION)
+    a = np.asarray(x, float) - np.mean(x)
+    if not _on_edge(est, SEARCH_FRACTION) and is_mesh_line(a, fs_hz, z_pinion * est.fr_pinion_hz, z_pinion, z_wheel):
+        return est
+    return widened_speed(x, fs_hz, z_wheel=z_wheel, **kw) or est
+
+
+def widened_speed(x: np.ndarray, fs_hz: float, *, z_pinion: int, z_wheel: int,
+                  nominal_rpm: float) -> SpeedEstimate | None:
+    """The speed searched within :data:`WIDE_SEARCH_FRACTION` of ``nominal_rpm``: the first of its harmonic sum's
+    :data:`N_PEAKS` highest maxima, ranked by how far their family stands out, that lies inside the search, has two odd
+    harmonics below 0.45 fs, stands out on all its harmonics (:data:`compare.pair_check.MESH_FAMILY_DB`) and on its
+    odd ones (:data:`ODD_LINE_DB`), it is the strongest harmonic family (the harmonic sum's maximum) within
+    :data:`NEIGHBOURS` pinion orders of it, and the sideband family around it is no other gear's
+    (:func:`compare.pair_check.sideband_family`): a record with a local fault holds every order of its shaft, and
+    ``k fr`` for any ``k`` near ``z1`` is a harmonic family that stands out; the mesh is the strongest of them
+    (a broken tooth of the helical rig searched below its speed: ``16 fr`` stands out by 28 dB and its sidebands
+    count 16 teeth, within the record's resolution of 17, but ``17 fr`` is the stronger). None when none does."""
+    fm0 = z_pinion * nominal_rpm / 60.0
+    try:
+        a, harm, maxima = _comb_maxima(x, fs_hz, fm0, WIDE_SEARCH_FRACTION, 10, N_PEAKS)
+    except InputError:      # no mesh harmonic below 0.45 fs at the widened search's top
+        return None
+    for f0 in sorted(maxima, key=lambda f: -mesh_line_stands_out(a, fs_hz, f)[0]):
+        fm_hz = _refined(a, fs_hz, harm, f0)
+        if abs(fm_hz / fm0 - 1.0) >= EDGE_FRACTION * WIDE_SEARCH_FRACTION or 3.0 * fm_hz >= 0.45 * fs_hz:
+            continue
+        if not is_mesh_line(a, fs_hz, fm_hz, z_pinion, z_wheel, strict=True):
+            continue
+        rpm = 60.0 * fm_hz / z_pinion
+        return SpeedEstimate(rpm, nominal_rpm, "spectrum", constant_track(a.size, fs_hz, rpm / 60.0),
+                             search_fraction=WIDE_SEARCH_FRACTION)
+    return None
+
+
+def is_mesh_line(a: np.ndarray, fs_hz: float, fm_hz: float, z_pinion: int, z_wheel: int, *,
+                  strict: bool = False) -> bool:
+    """Whether ``fm_hz`` is the mesh line (:func:`widened_speed`'s tests; ``strict``: also the median of its
+    harmonics and of its odd ones stand out, which the first search does not require of a quiet pair)."""
+    from compare.pair_check import MESH_FAMILY_DB, sideband_family
+
+    all_db, median_db, odd_db = mesh_line_stands_out(a, fs_hz, fm_hz)
+    if all_db < MESH_FAMILY_DB or (strict and (median_db < MESH_FAMILY_DB or odd_db < ODD_LINE_DB)):
+        return False
+    if local_maximum_share(a, fs_hz, fm_hz, z_pinion) < LOCAL_MAXIMUM_SHARE:
+        return False
+    family = sideband_family(a, fm_hz / fs_hz, z_pinion, z_wheel)
+    return family is None or not family["other_family"]
+
+
+def local_maximum_share(a: np.ndarray, fs_hz: float, fm_hz: float, z_pinion: int, *, n_harmonics: int = 10) -> float:
+    """The share of the harmonics of ``fm_hz`` below 0.45 fs (at most ``n_harmonics``) whose line is the strongest
+    within :data:`NEIGHBOURS` pinion orders of it (``fm_hz / z_pinion`` each; the line: the peak of the 4-times
+    padded spectrum within one bin of the harmonic; its neighbours: the peak over the rest of the window beyond
+    half an order). A mesh harmonic outweighs its sidebands; in a record with a local fault every pinion order is a
+    line, and a family at ``(z1 +/- k) fr`` is made of sidebands, each the strongest of its neighbourhood about as
+    often as any of them. A vote, not a power sum: one harmonic on a housing resonance leads a power sum."""
+    from compare.pair_check import PAD
+    from models.unknown_rate import log_power
+
+    logp, n_fft = log_power(a, PAD)
+    order = fm_hz / z_pinion * n_fft / fs_hz           # one pinion order, in padded bins
+    half, reach = max(PAD + 1, int(0.5 * order)), int(NEIGHBOURS * order)
+    votes = []
+    for m in range(1, n_harmonics + 1):
+        c = int(round(m * fm_hz * n_fft / fs_hz))
+        if m * fm_hz >= 0.45 * fs_hz or c + reach >= logp.size:
+            break
+        line = np.max(logp[c - PAD:c + PAD + 1])
+        around = np.concatenate([logp[max(c - reach, 0):c - half], logp[c + half + 1:c + reach + 1]])
+        votes.append(bool(around.size == 0 or line > np.max(around)))
+    return float(np.mean(votes)) if votes else 0.0
+
+
+def _on_edge(est: SpeedEstimate, fraction: float) -> bool:
+    return abs(est.speed_rpm / est.nominal_rpm - 1.0) >= EDGE_FRACTION * fraction
+
+
+def speed_message(speed: SpeedEstimate) -> str | None:
+    """One line when the speed was found by the widened search (the sidecar's speed is further off than
+    :data:`SEARCH_FRACTION`), else None."""
+    if speed.search_fraction is None or speed.search_fraction <= SEARCH_FRACTION:
+        return None
+    return off_sidecar_message(speed.speed_rpm, speed.nominal_rpm, SEARCH_FRACTION)
+
+
+def off_sidecar_message(speed_rpm: float, nominal_rpm: float, first_fraction: float) -> str:
+    """The sidecar's speed is further off than the first search covered; the widened one found the mesh line."""
+    off = 100.0 * (speed_rpm / nominal_rpm - 1.0)
+    return (f"the mesh line is at {speed_rpm:.1f} rpm of the pinion, {abs(off):.1f} % "
+            f"{'above' if off > 0 else 'below'} the sidecar's speed_rpm {nominal_rpm:g} (no mesh line stands "
+            f"out within +/-{100 * first_fraction:.3g} % of it; found searching +/-{100 * WIDE_SEARCH_FRACTION:g} %): "
+            "the measured speed is used; check speed_rpm (a set point or a nameplate speed?)")
+
+
+def refine_speed(measurement, *, search_fraction: float | None = None) -> SpeedEstimate:
+    """Refined speed of a :class:`compare.measurement.Measurement` (tacho if it has one, else spectrum: by
+    :func:`spectrum_speed`, or within ``search_fraction`` alone when given)."""
     pair = measurement.pair
     z1, z2 = pair.pinion.teeth, pair.wheel.teeth
     if measurement.tacho is not None:
@@ -150,10 +317,14 @@ def refine_speed(measurement, *, search_fraction: float = 0.05) -> SpeedEstimate
         return speed_from_tacho(measurement.tacho_signal, measurement.fs_hz, z_pinion=z1, z_wheel=z2,
                                 pulses_per_rev=sc.tacho_pulses_per_rev, shaft=sc.tacho_shaft,
                                 nominal_rpm=measurement.speed_rpm)
-    est = speed_from_spectrum(measurement.signal, measurement.fs_hz, z_pinion=z1, nominal_rpm=measurement.speed_rpm,
-                              search_fraction=search_fraction)
+    kw = dict(z_pinion=z1, nominal_rpm=measurement.speed_rpm)
+    if search_fraction is None:
+        est = spectrum_speed(measurement.signal, measurement.fs_hz, z_wheel=z2, **kw)
+    else:
+        est = speed_from_spectrum(measurement.signal, measurement.fs_hz, search_fraction=search_fraction, **kw)
     drift, track = drift_track(measurement.signal, measurement.fs_hz, est.speed_rpm / 60.0, z1, z2)
-    return SpeedEstimate(est.speed_rpm, est.nominal_rpm, est.method, track or est.track, drift, track is not None)
+    return SpeedEstimate(est.speed_rpm, est.nominal_rpm, est.method, track or est.track, drift, track is not None,
+                         est.search_fraction)
 
 
 def drift_track(x: np.ndarray, fs_hz: float, fr_hz: float, z_pinion: int,

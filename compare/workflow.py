@@ -35,12 +35,13 @@ from compare.escalation import compare_and_attribute, reason_text
 from compare.joint_refit import joint_refit_message
 from compare.ledger import append_row, last_candidate, ledger_path, make_row, read_ledger
 from compare.measurement import load_measurement
+from compare.model import ComparisonModel, parse_add
 from compare.pair_check import check_pair, pair_message
 from compare.quality import clipping_message
-from compare.model import ComparisonModel, parse_add
-from compare.response import attach_responses
 from compare.report import document, write_html, write_json
+from compare.response import attach_responses
 from compare.sideband_fit import sideband_fit_message
+from compare.speed import speed_message
 from datagen.effects import EffectSpec, get, load_plugin
 
 
@@ -107,6 +108,8 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
         for c in candidates:
             get(c)
     ref = prepare_reference(measurement)
+    if (msg := speed_message(ref.speed)) is not None:
+        messages.append(msg)
     if ref.speed.tracked:
         messages.append(f"the speed drifts within the record ({ref.speed.drift_rad:.2f} rad RMS of the mesh phase, "
                         "slower than half the wheel's rotation; read from two mesh harmonics that agree): the "

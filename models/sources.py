@@ -19,8 +19,12 @@ motor's nameplate, a set point). So the speed is measured: from the tachometer c
 one, else from the mesh harmonics near the sidecar's value (:func:`compare.speed.speed_from_spectrum`),
 searched within half a pinion order at the mesh, ``1 / (2 z1)`` of it: beyond that a mesh harmonic could
 align with a sideband of its neighbour. The spectrum's estimate is kept only when the strongest line of a search
-three times as wide lies within that half order (one search, ~40 ms for a 1 s record at 12.8 kHz); otherwise the sidecar's speed is used and the record carries a warning
-(``speed_note``): the sidecar is then off by more than the search, and a tachometer is needed. The labels keep
+three times as wide lies within that half order (one search, ~40 ms for a 1 s record at 12.8 kHz). Otherwise the
+comparison's widened search decides (:func:`compare.speed.widened_speed`: +/- 25 %, its maxima ranked by how far
+their harmonic family stands out of the families beside it, taken only where the family stands out on all its
+harmonics and on its odd ones): a sidecar holding a set point or a nameplate speed a few percent off is read at
+the measured speed, with a warning (``speed_note``) naming both; when no family stands out, the sidecar's speed
+is used and the warning says a tachometer or the measured speed is needed. The labels keep
 ``speed_rpm_sidecar`` and ``speed_method`` (``tacho``, ``spectrum`` or ``sidecar``). A speed that varies within
 the record is then followed: the record is resampled to its constant mean speed (:mod:`models.order_tracking`)
 where its mesh phase strays from the constant-speed line by more than
@@ -137,7 +141,8 @@ CONFIRM_WIDTH = 3.0
 def measured_speed(measurement) -> tuple[float, str, str]:
     """``(speed_rpm, method, note)`` of a :class:`compare.measurement.Measurement` (module docstring): method
     ``tacho``, ``spectrum`` or ``sidecar``; ``note`` is a warning, or "" ."""
-    from compare.speed import refine_speed, speed_from_spectrum
+    from compare.speed import (WIDE_SEARCH_FRACTION, is_mesh_line, off_sidecar_message, refine_speed,
+                               speed_from_spectrum, widened_speed)
 
     nominal = float(measurement.speed_rpm)
     if measurement.tacho is not None:
@@ -152,12 +157,20 @@ def measured_speed(measurement) -> tuple[float, str, str]:
     except InputError:      # no mesh harmonic below 0.45 fs
         return nominal, "sidecar", (f"speed not measured: no mesh harmonic of {nominal:g} rpm x {z} teeth below "
                                     f"0.45 fs ({0.45 * measurement.fs_hz:g} Hz)")
-    if abs(wide / nominal - 1) < 0.98 * half:
+    if abs(wide / nominal - 1) < 0.98 * half and is_mesh_line(
+            np.asarray(measurement.signal, float) - np.mean(measurement.signal), measurement.fs_hz, z * wide / 60.0,
+            z, int(measurement.pair.wheel.teeth)):
         return float(wide), "spectrum", ""
-    return nominal, "sidecar", (f"speed not confirmed by the spectrum: its strongest mesh line within "
-                                f"+/-{100 * CONFIRM_WIDTH * half:.1f} % is at {wide:.1f} rpm, not within "
-                                f"+/-{100 * half:.1f} % of the sidecar's {nominal:g} rpm (give a tachometer channel "
-                                "or the measured speed)")
+    found = widened_speed(measurement.signal, measurement.fs_hz, z_wheel=int(measurement.pair.wheel.teeth), **kw)
+    if found is not None:
+        rpm = float(found.speed_rpm)
+        return rpm, "spectrum", ("" if abs(rpm / nominal - 1) < 0.98 * half else
+                                 off_sidecar_message(rpm, nominal, CONFIRM_WIDTH * half))
+    return nominal, "sidecar", (f"speed not confirmed by the spectrum: no mesh line within "
+                                f"+/-{100 * WIDE_SEARCH_FRACTION:g} % of the sidecar's {nominal:g} rpm passes the "
+                                "tests of compare.speed.widened_speed (its strongest harmonic family within "
+                                f"+/-{100 * CONFIRM_WIDTH * half:.1f} %: {wide:.1f} rpm); the sidecar's speed is used "
+                                "(give a tachometer channel or the measured speed)")
 
 
 def pair_warning(measurement, speed_rpm: float, method: str) -> str:

@@ -67,9 +67,12 @@ def test_a_wrong_pair_with_a_tachometer_finds_no_mesh_line(spur_rig):
 
 
 def test_a_wrong_speed_without_a_tachometer_finds_no_mesh_line(spur_rig):
-    """The right pair but a nominal speed 15 % off: the speed search (+/- 5 %) cannot reach the mesh line."""
-    c = _check(_with_sidecar(spur_rig, "spur-gds", speed_rpm=1150.0, tacho=False))
+    """The right pair but a nominal speed 40 % off: no speed search (+/- 5 %, then +/- 25 %) reaches the mesh
+    line; 15 % off, the widened search finds it (tests/test_compare_speed_search.py)."""
+    c = _check(_with_sidecar(spur_rig, "spur-gds", speed_rpm=1400.0, tacho=False))
     assert c["questioned"]
+    c = _check(_with_sidecar(spur_rig, "spur-gds", speed_rpm=1150.0, tacho=False))
+    assert not c["questioned"] and c["mesh_hz"] == pytest.approx(29 * 1000.0 / 60.0, rel=1e-4)
 
 
 def test_a_wrong_pair_whose_speed_puts_the_mesh_right_is_told_by_the_sidebands(spur_rig):

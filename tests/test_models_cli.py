@@ -170,12 +170,27 @@ def test_measurement_speed_is_measured_not_taken_from_the_sidecar(workdir, tmp_p
     assert tach.labels["speed_method"][0] == "tacho"
     assert tach.labels["speed_rpm"][0] == pytest.approx(true[0], rel=1e-4)
 
-    # 3 % off: beyond the search, so the sidecar's value stays and the prediction carries a warning
-    _write_measurements(tmp_path / "far", test.subset(np.arange(2)), speeds=list(true[:2] * 1.03))
+    # 3 % and 12 % off (a set point, a nameplate speed): beyond the half-order search; the widened search finds
+    # the mesh line, the measured speed is used, and the prediction says the sidecar is off
+    for off in (1.03, 0.88):
+        folder = tmp_path / f"off{off}"
+        _write_measurements(folder, test.subset(np.arange(2)), speeds=list(true[:2] * off))
+        off_files = sorted(folder.glob("rec*.csv"))
+        got = load_measurements(off_files)
+        assert list(got.labels["speed_method"]) == ["spectrum"] * 2
+        np.testing.assert_allclose(got.labels["speed_rpm"], true[:2], rtol=1e-4)
+        assert all(f"{abs(100 * (1 / off - 1)):.1f} % {'below' if off > 1 else 'above'} the sidecar" in n
+                   for n in got.labels["speed_note"])
+        capsys.readouterr()
+        assert main(["predict", str(workdir / "model"), *map(str, off_files)]) == 0
+        assert capsys.readouterr().err.count("check speed_rpm") == 2
+
+    # 40 % off: beyond every search, so the sidecar's value stays and the prediction carries a warning
+    _write_measurements(tmp_path / "far", test.subset(np.arange(2)), speeds=list(true[:2] * 1.4))
     far_files = sorted((tmp_path / "far").glob("rec*.csv"))
     far = load_measurements(far_files)
     assert list(far.labels["speed_method"]) == ["sidecar"] * 2
-    np.testing.assert_allclose(far.labels["speed_rpm"], true[:2] * 1.03)
+    np.testing.assert_allclose(far.labels["speed_rpm"], true[:2] * 1.4)
     capsys.readouterr()
     assert main(["predict", str(workdir / "model"), *map(str, far_files)]) == 0
     assert capsys.readouterr().err.count("speed not confirmed by the spectrum") == 2
