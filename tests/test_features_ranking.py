@@ -132,3 +132,45 @@ def test_rank_features_reads_generated_dataset_with_two_pairs(tmp_path):
     fm4 = table["tsa_pinion_fm4[1]"].to_numpy()
     faulty = table["severity"].to_numpy() > 0
     assert np.all(fm4[faulty] > 6) and np.all(fm4[~faulty] < 4)
+
+
+def _drawn_nuisance_table(seed=0, n_per_class=90):
+    """Three classes; speed and SNR drawn uniformly and independently (every value distinct), as a sweep with
+    ``speed_rpm = [800, 2000]`` and ``snr_db = [10, 40]`` draws them."""
+    rng = np.random.default_rng(seed)
+    cls = np.repeat(np.arange(3), n_per_class)
+    n = cls.size
+    t = pd.DataFrame({"severity": 0.1 * cls, "severity_class": cls, "speed_rpm": rng.uniform(800.0, 2000.0, n),
+                      "snr_db": rng.uniform(10.0, 40.0, n)})
+    t["speed_scaled"] = cls * (t["speed_rpm"] / 1400.0) ** 2 + 0.05 * rng.standard_normal(n)
+    t["independent"] = cls + 0.05 * rng.standard_normal(n)
+    return t
+
+
+def test_robustness_to_drawn_nuisances_uses_bins():
+    """Speed and SNR drawn from ranges: a feature whose class separation grows with speed^2 (class 2 spans 0.65-4.1
+    over 800-2000 rpm) has speed robustness well below its SNR robustness (terciles of 30 records per class: 0.64
+    against 0.88, the latter below 1 only by the scatter of tercile means), so the two criteria differ; a feature
+    that depends on neither is robust to both (0.99, 1.00). Before, each drawn value was its own level and both
+    criteria were the same within-class spread (0.62 for both)."""
+    r = rank_features(_drawn_nuisance_table(), ["speed_scaled", "independent"], teeth_col=None).set_index("feature")
+    sp, sn = r.loc["speed_scaled", "robustness_speed_rpm"], r.loc["speed_scaled", "robustness_snr_db"]
+    assert sp < 0.75 and sn > 0.85 and sn - sp > 0.15
+    assert r.loc["speed_scaled", "robustness"] == sp
+    assert r.loc["independent", "robustness_speed_rpm"] > 0.95
+    assert r.loc["independent", "robustness_snr_db"] > 0.95
+
+
+def test_robustness_drawn_nuisance_hand_value():
+    """Two classes of 10 records (means 0 and 1: S = 0.5) with distinct drawn speeds: 10 records per class give
+    halves (low / high speed), and an offset of -/+0.25 below / above the median speed gives N = 0.25 (a scatter
+    of +/-0.1 that cancels in each half does not count), so robustness = 0.5 / 0.75 = 2/3 (tol 1e-12; the old
+    per-value levels counted the scatter: 0.65); SNR on a grid of two levels, balanced in each speed half, keeps its
+    levels and does not move the feature (robustness 1)."""
+    speed = np.r_[np.linspace(800, 1790, 10), np.linspace(810, 1800, 10)]
+    cls = np.repeat([0, 1], 10)
+    t = pd.DataFrame({"severity": cls, "severity_class": cls, "speed_rpm": speed, "snr_db": np.tile([10, 20, 10, 20, 10], 4),
+                      "f": cls + np.where(speed > np.median(speed), 0.25, -0.25) + np.tile([0.1, 0.1, -0.1, -0.1, 0.0], 4)})
+    r = rank_features(t, ["f"], teeth_col=None)
+    assert r.loc[0, "robustness_speed_rpm"] == pytest.approx(2 / 3, abs=1e-12)
+    assert r.loc[0, "robustness_snr_db"] == pytest.approx(1.0, abs=1e-12)
