@@ -268,9 +268,11 @@ def ranking_markdown(ranking: pd.DataFrame, *, top: int | None = None, digits: i
 
 
 def write_ranking(ranking: pd.DataFrame, csv_path: str | Path, markdown_path: str | Path, *,
-                  top: int | None = None) -> None:
-    """Write the full ranking as CSV and (the first ``top`` rows) as Markdown, atomically."""
+                  top: int | None = None, note: str | None = None) -> None:
+    """Write the full ranking as CSV and (the first ``top`` rows) as Markdown, atomically; ``note`` (e.g. that
+    the dataset is incomplete) heads the Markdown as ``**Note:** ...``."""
     with atomic_path(csv_path) as tmp:
         ranking.to_csv(tmp, index=False)
+    head = f"**Note:** {note}\n\n" if note else ""
     with atomic_path(markdown_path) as tmp:
-        Path(tmp).write_text(ranking_markdown(ranking, top=top))
+        Path(tmp).write_text(head + ranking_markdown(ranking, top=top))

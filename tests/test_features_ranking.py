@@ -174,3 +174,67 @@ def test_robustness_drawn_nuisance_hand_value():
     r = rank_features(t, ["f"], teeth_col=None)
     assert r.loc[0, "robustness_speed_rpm"] == pytest.approx(2 / 3, abs=1e-12)
     assert r.loc[0, "robustness_snr_db"] == pytest.approx(1.0, abs=1e-12)
+
+
+def _write_generated(root, channels, *, n_records=6, n_samples=None, finalize=True):
+    """A `gearpit generate`-layout dataset of one 28/37 pair with ``n_records`` finished samples (0.25 s, half of
+    them pitted) in one shard; metadata claims ``n_samples`` (default: as many) in ``n_samples / n_records`` shards.
+    Every channel holds the same synthetic record, the ``*_m`` ones scaled to micrometres."""
+    from datagen import dataset as ds
+
+    n_samples = n_records if n_samples is None else n_samples
+    rows, sigs = [], []
+    for i in range(n_records):
+        depth = 0.5 if i % 2 else 0.0
+        x = gear_signal_example(z_pinion=28, z_wheel=37, fault_depth=depth, duration_s=0.25, snr_db=20, seed=i).x
+        sigs.append(np.stack([x * (1e-6 if c.endswith("_m") else 1.0) for c in channels]))
+        rows.append(dict(sample_index=i, pair="a", severity=depth, severity_class="s1" if depth else "healthy",
+                         n_pitted_teeth=int(depth > 0), speed_rpm=1500.0, snr_db=20.0))
+    (root / "shards").mkdir(parents=True)
+    meta = {"format": "gearpit-dataset", "n_samples": n_samples, "shard_size": n_records,
+            "n_shards": n_samples // n_records, "channels": list(channels), "fs_hz": 12800.0,
+            "n_time": sigs[0].shape[1], "pairs": {"a": {"z_pinion": 28, "z_wheel": 37}}}
+    (root / "metadata.json").write_text(json.dumps(meta))
+    ds.write_shard(root, 0, np.stack(sigs), rows, [])
+    if finalize:
+        ds.finalize(root)
+
+
+def test_rank_features_unit_follows_channel(tmp_path, capsys):
+    """The feature unit is the channel's, read from its name (datagen.output_channels): the default (first)
+    channel dte_m, a displacement, gives `raw_rms[m]` and `spec_pinion_order2[m]`, `--channel acc_pinion_loa_m_s2`
+    `[m/s^2]`;
+    dimensionless features stay `[1]`. Before, every channel was labelled m/s^2. A complete dataset: no warning."""
+    root = tmp_path / "gen"
+    _write_generated(root, ["dte_m", "acc_pinion_loa_m_s2"])
+    for channel, unit in ((None, "m"), ("acc_pinion_loa_m_s2", "m/s^2")):
+        flag = [] if channel is None else ["--channel", channel]
+        assert main(["rank-features", str(root), *flag, "--hht", "none", "--out", str(tmp_path / unit[:1])]) == 0
+        cols = pd.read_parquet(tmp_path / unit[:1] / "features.parquet").columns
+        assert f"raw_rms[{unit}]" in cols and f"spec_pinion_order2[{unit}]" in cols and "tsa_pinion_fm4[1]" in cols
+        assert not any(c.endswith("[m/s^2]") for c in cols) or unit == "m/s^2"
+    assert "incomplete" not in capsys.readouterr().err
+
+
+def test_channel_unit_table():
+    """Units of the simulator's channel names; the healthy twin has its channel's unit; unknown names: None."""
+    from gearpit.commands.rank_features import channel_unit
+
+    assert [channel_unit(c) for c in ("acc_wheel_axial_m_s2", "mesh_deflection_m", "mesh_force_n",
+                                      "speed_pinion_rpm", "tacho_pinion", "acc_pinion_loa_m_s2@reference",
+                                      "accel")] == ["m/s^2", "m", "N", "rpm", "1", "m/s^2", None]
+
+
+def test_rank_features_warns_on_incomplete_dataset(tmp_path, capsys):
+    """A dataset with 6 of 18 samples finished (1 of 3 shards, no index.parquet) is ranked on the 6 with
+    `warning: incomplete dataset: 6 of 18 samples` on stderr, the same note heading feature_ranking.md, and the
+    counts in the `dataset` attribute of features.parquet. Before, it went on silently."""
+    root = tmp_path / "gen"
+    _write_generated(root, ["acc_pinion_loa_m_s2"], n_samples=18, finalize=False)
+    assert main(["rank-features", str(root), "--hht", "none", "--out", str(tmp_path / "out")]) == 0
+    err = capsys.readouterr().err
+    assert "warning: incomplete dataset: 6 of 18 samples" in err
+    md = (tmp_path / "out" / "feature_ranking.md").read_text()
+    assert md.startswith("**Note:** incomplete dataset: 6 of 18 samples")
+    table = pd.read_parquet(tmp_path / "out" / "features.parquet")
+    assert len(table) == 6 and table.attrs["dataset"] == {"n_finished": 6, "n_samples": 18}
