@@ -14,10 +14,21 @@ Criteria, each computed per feature on the rows where it is finite:
   severity; ``spearman_severity`` keeps the sign.
 - ``robustness_<col>`` for each nuisance column (speed, SNR): ``S / (S + N_col)``
   with ``S`` the standard deviation of the severity-class means and ``N_col`` the
-  standard deviation of the means over the levels of ``col`` within one severity
+  standard deviation of the means over the groups of ``col`` within one severity
   class, averaged over classes. 1 when speed (or noise) does not move the feature
   at all compared with damage, 0.5 when it moves it as much as damage does.
-  ``robustness`` is the smallest of them.
+  ``robustness`` is the smallest of them. The groups (:func:`nuisance_groups`) are
+  the levels of a nuisance set on a grid (at most ``MAX_LEVELS`` distinct values,
+  each used at least twice on average); a nuisance drawn from a range is cut into
+  equal-frequency bins [4]_ with edges pooled over the classes (the same speeds
+  are "low" for every class): terciles, so that a dependence confined to mid-range
+  (a resonance crossed) is seen too, or halves (low / high) when the largest class
+  has fewer than ``3 * MIN_PER_BIN`` records. Only bins holding at least
+  ``MIN_PER_BIN`` records of a class enter its ``N_col``, and only classes with two
+  such bins (a small healthy class may sit out; none: NaN), since means of fewer
+  records would mostly measure the within-class scatter. Taking each drawn value
+  as its own level would do exactly that: ``N_col`` would be the within-class
+  spread, the same for every nuisance.
 - ``score``: mean over the criteria of the feature's percentile rank (1 best);
   ``rank`` orders by it.
 
@@ -30,6 +41,9 @@ References
 .. [3] Coble, J., Hines, J. W. (2009). Identifying optimal prognostic parameters from
    data: a genetic algorithms approach. Annual Conference of the PHM Society
    (monotonicity as a prognostic-parameter criterion).
+.. [4] Dougherty, J., Kohavi, R., Sahami, M. (1995). Supervised and unsupervised
+   discretization of continuous features. Proc. 12th International Conference on
+   Machine Learning, 194-202 (equal-frequency binning).
 """
 from __future__ import annotations
 
@@ -46,6 +60,10 @@ from gearpit.errors import require
 
 #: criteria that enter the score, best = largest
 SCORE_CRITERIA: tuple[str, ...] = ("f_severity", "mi_severity", "monotonicity", "f_teeth", "mi_teeth", "robustness")
+#: a nuisance with at most this many distinct values (each used twice on average) keeps its levels
+MAX_LEVELS = 10
+#: records per class and bin of a nuisance drawn from a range (terciles need 3x, halves 2x per class)
+MIN_PER_BIN = 5
 
 
 def _anova_f(v: np.ndarray, y: np.ndarray) -> float:
@@ -76,10 +94,58 @@ def _mutual_information(values: np.ndarray, finite: np.ndarray, y: np.ndarray, s
     return out
 
 
-def _robustness(v: np.ndarray, cls: np.ndarray, nuisance: np.ndarray) -> float:
-    if np.unique(cls).size < 2 or np.unique(nuisance).size < 2:
+def nuisance_groups(nuisance: np.ndarray, cls: np.ndarray) -> tuple[np.ndarray, bool]:
+    """Group of each record for the robustness to one nuisance column (module docstring).
+
+    Parameters
+    ----------
+    nuisance : array (n,)
+        Nuisance value per record (e.g. speed in rpm, SNR in dB); NaN for unknown.
+    cls : array of int (n,)
+        Severity class index per record.
+
+    Returns
+    -------
+    groups : array of int (n,)
+        Level index (a grid of at most ``MAX_LEVELS`` values, or labels), or
+        tercile / half index (values drawn from a range); -1 where the value is
+        unknown, and everywhere when even the largest class has fewer than
+        ``2 * MIN_PER_BIN`` records.
+    binned : bool
+        Whether the groups are bins of a nuisance drawn from a range.
+
+    Examples
+    --------
+    >>> speed = np.linspace(800.0, 2000.0, 60)
+    >>> g, binned = nuisance_groups(speed, np.arange(60) % 2)
+    >>> np.bincount(g).tolist(), binned
+    ([20, 20, 20], True)
+    """
+    codes, levels = pd.factorize(pd.Series(nuisance), sort=True)
+    if not pd.api.types.is_numeric_dtype(levels) or pd.api.types.is_bool_dtype(levels):
+        return codes, False   # labels (e.g. "low", "high"): their levels, -1 where missing
+    x = np.asarray(nuisance, dtype=float)
+    out = np.full(x.size, -1)
+    known = np.isfinite(x)
+    if not known.any():
+        return out, False
+    if levels.size <= MAX_LEVELS and 2 * levels.size <= known.sum():
+        return codes, False
+    per_class = np.bincount(cls[known & (cls >= 0)])
+    n_bins = min(3, int(per_class.max(initial=0)) // MIN_PER_BIN)
+    if n_bins < 2:
+        return out, True
+    ranks = pd.Series(x[known]).rank(method="average").to_numpy()
+    out[known] = np.minimum(((ranks - 0.5) * n_bins / known.sum()).astype(int), n_bins - 1)
+    return out, True
+
+
+def _robustness(v: np.ndarray, cls: np.ndarray, groups: np.ndarray, min_cell: int = 1) -> float:
+    """``S / (S + N)`` (module docstring); a class's ``N`` from its groups with ``>= min_cell`` records."""
+    keep = groups >= 0
+    v, cls, g = v[keep], cls[keep], groups[keep]
+    if np.unique(cls).size < 2 or np.unique(g).size < 2:
         return float("nan")
-    _, g = np.unique(nuisance, return_inverse=True)
     n_cls, n_g = int(cls.max()) + 1, int(g.max()) + 1
     class_means = np.bincount(cls, weights=v, minlength=n_cls) / np.maximum(np.bincount(cls, minlength=n_cls), 1)
     present = np.bincount(cls, minlength=n_cls) > 0
@@ -89,8 +155,11 @@ def _robustness(v: np.ndarray, cls: np.ndarray, nuisance: np.ndarray) -> float:
     sums = np.bincount(cell, weights=v, minlength=n_cls * n_g).reshape(n_cls, n_g)
     spreads = []
     for c in np.nonzero(present)[0]:
-        m = sums[c, counts[c] > 0] / counts[c, counts[c] > 0]
-        spreads.append(float(np.std(m)))
+        full = counts[c] >= max(min_cell, 1)
+        if full.sum() >= (2 if min_cell > 1 else 1):
+            spreads.append(float(np.std(sums[c, full] / counts[c, full])))
+    if not spreads:
+        return float("nan")
     noise = float(np.mean(spreads))
     return s / (s + noise) if s + noise > 0 else float("nan")
 
@@ -145,6 +214,8 @@ def rank_features(table: pd.DataFrame, feature_columns: list[str] | None = None,
     finite = np.isfinite(values) & np.isfinite(sev)[:, None]
     mi_sev = _mutual_information(values, finite, cls, seed)
     mi_tee = _mutual_information(values, finite, tee, seed) if tee is not None else None
+    groups = {c: nuisance_groups(table[c].to_numpy(), cls) for c in nuis}
+    min_cell = {c: MIN_PER_BIN if binned else 1 for c, (_, binned) in groups.items()}
     rows = []
     for j, col in enumerate(feature_columns):
         ok = finite[:, j]
@@ -161,7 +232,7 @@ def rank_features(table: pd.DataFrame, feature_columns: list[str] | None = None,
             row["mi_teeth"] = float(mi_tee[j])
         rob = []
         for c in nuis:
-            r = _robustness(vv, cls[ok], table[c].to_numpy()[ok])
+            r = _robustness(vv, cls[ok], groups[c][0][ok], min_cell[c])
             row[f"robustness_{c}"] = r
             rob.append(r)
         finite_rob = [r for r in rob if np.isfinite(r)]
@@ -197,9 +268,11 @@ def ranking_markdown(ranking: pd.DataFrame, *, top: int | None = None, digits: i
 
 
 def write_ranking(ranking: pd.DataFrame, csv_path: str | Path, markdown_path: str | Path, *,
-                  top: int | None = None) -> None:
-    """Write the full ranking as CSV and (the first ``top`` rows) as Markdown, atomically."""
+                  top: int | None = None, note: str | None = None) -> None:
+    """Write the full ranking as CSV and (the first ``top`` rows) as Markdown, atomically; ``note`` (e.g. that
+    the dataset is incomplete) heads the Markdown as ``**Note:** ...``."""
     with atomic_path(csv_path) as tmp:
         ranking.to_csv(tmp, index=False)
+    head = f"**Note:** {note}\n\n" if note else ""
     with atomic_path(markdown_path) as tmp:
-        Path(tmp).write_text(ranking_markdown(ranking, top=top))
+        Path(tmp).write_text(head + ranking_markdown(ranking, top=top))

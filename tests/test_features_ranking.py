@@ -132,3 +132,109 @@ def test_rank_features_reads_generated_dataset_with_two_pairs(tmp_path):
     fm4 = table["tsa_pinion_fm4[1]"].to_numpy()
     faulty = table["severity"].to_numpy() > 0
     assert np.all(fm4[faulty] > 6) and np.all(fm4[~faulty] < 4)
+
+
+def _drawn_nuisance_table(seed=0, n_per_class=90):
+    """Three classes; speed and SNR drawn uniformly and independently (every value distinct), as a sweep with
+    ``speed_rpm = [800, 2000]`` and ``snr_db = [10, 40]`` draws them."""
+    rng = np.random.default_rng(seed)
+    cls = np.repeat(np.arange(3), n_per_class)
+    n = cls.size
+    t = pd.DataFrame({"severity": 0.1 * cls, "severity_class": cls, "speed_rpm": rng.uniform(800.0, 2000.0, n),
+                      "snr_db": rng.uniform(10.0, 40.0, n)})
+    t["speed_scaled"] = cls * (t["speed_rpm"] / 1400.0) ** 2 + 0.05 * rng.standard_normal(n)
+    t["independent"] = cls + 0.05 * rng.standard_normal(n)
+    return t
+
+
+def test_robustness_to_drawn_nuisances_uses_bins():
+    """Speed and SNR drawn from ranges: a feature whose class separation grows with speed^2 (class 2 spans 0.65-4.1
+    over 800-2000 rpm) has speed robustness well below its SNR robustness (terciles of 30 records per class: 0.64
+    against 0.88, the latter below 1 only by the scatter of tercile means), so the two criteria differ; a feature
+    that depends on neither is robust to both (0.99, 1.00). Before, each drawn value was its own level and both
+    criteria were the same within-class spread (0.62 for both)."""
+    r = rank_features(_drawn_nuisance_table(), ["speed_scaled", "independent"], teeth_col=None).set_index("feature")
+    sp, sn = r.loc["speed_scaled", "robustness_speed_rpm"], r.loc["speed_scaled", "robustness_snr_db"]
+    assert sp < 0.75 and sn > 0.85 and sn - sp > 0.15
+    assert r.loc["speed_scaled", "robustness"] == sp
+    assert r.loc["independent", "robustness_speed_rpm"] > 0.95
+    assert r.loc["independent", "robustness_snr_db"] > 0.95
+
+
+def test_robustness_drawn_nuisance_hand_value():
+    """Two classes of 10 records (means 0 and 1: S = 0.5) with distinct drawn speeds: 10 records per class give
+    halves (low / high speed), and an offset of -/+0.25 below / above the median speed gives N = 0.25 (a scatter
+    of +/-0.1 that cancels in each half does not count), so robustness = 0.5 / 0.75 = 2/3 (tol 1e-12; the old
+    per-value levels counted the scatter: 0.65); SNR on a grid of two levels, balanced in each speed half, keeps its
+    levels and does not move the feature (robustness 1)."""
+    speed = np.r_[np.linspace(800, 1790, 10), np.linspace(810, 1800, 10)]
+    cls = np.repeat([0, 1], 10)
+    t = pd.DataFrame({"severity": cls, "severity_class": cls, "speed_rpm": speed, "snr_db": np.tile([10, 20, 10, 20, 10], 4),
+                      "f": cls + np.where(speed > np.median(speed), 0.25, -0.25) + np.tile([0.1, 0.1, -0.1, -0.1, 0.0], 4)})
+    r = rank_features(t, ["f"], teeth_col=None)
+    assert r.loc[0, "robustness_speed_rpm"] == pytest.approx(2 / 3, abs=1e-12)
+    assert r.loc[0, "robustness_snr_db"] == pytest.approx(1.0, abs=1e-12)
+
+
+def _write_generated(root, channels, *, n_records=6, n_samples=None, finalize=True):
+    """A `gearpit generate`-layout dataset of one 28/37 pair with ``n_records`` finished samples (0.25 s, half of
+    them pitted) in one shard; metadata claims ``n_samples`` (default: as many) in ``n_samples / n_records`` shards.
+    Every channel holds the same synthetic record, the ``*_m`` ones scaled to micrometres."""
+    from datagen import dataset as ds
+
+    n_samples = n_records if n_samples is None else n_samples
+    rows, sigs = [], []
+    for i in range(n_records):
+        depth = 0.5 if i % 2 else 0.0
+        x = gear_signal_example(z_pinion=28, z_wheel=37, fault_depth=depth, duration_s=0.25, snr_db=20, seed=i).x
+        sigs.append(np.stack([x * (1e-6 if c.endswith("_m") else 1.0) for c in channels]))
+        rows.append(dict(sample_index=i, pair="a", severity=depth, severity_class="s1" if depth else "healthy",
+                         n_pitted_teeth=int(depth > 0), speed_rpm=1500.0, snr_db=20.0))
+    (root / "shards").mkdir(parents=True)
+    meta = {"format": "gearpit-dataset", "n_samples": n_samples, "shard_size": n_records,
+            "n_shards": n_samples // n_records, "channels": list(channels), "fs_hz": 12800.0,
+            "n_time": sigs[0].shape[1], "pairs": {"a": {"z_pinion": 28, "z_wheel": 37}}}
+    (root / "metadata.json").write_text(json.dumps(meta))
+    ds.write_shard(root, 0, np.stack(sigs), rows, [])
+    if finalize:
+        ds.finalize(root)
+
+
+def test_rank_features_unit_follows_channel(tmp_path, capsys):
+    """The feature unit is the channel's, read from its name (datagen.output_channels): the default (first)
+    channel dte_m, a displacement, gives `raw_rms[m]` and `spec_pinion_order2[m]`, `--channel acc_pinion_loa_m_s2`
+    `[m/s^2]`;
+    dimensionless features stay `[1]`. Before, every channel was labelled m/s^2. A complete dataset: no warning."""
+    root = tmp_path / "gen"
+    _write_generated(root, ["dte_m", "acc_pinion_loa_m_s2"])
+    for channel, unit in ((None, "m"), ("acc_pinion_loa_m_s2", "m/s^2")):
+        flag = [] if channel is None else ["--channel", channel]
+        assert main(["rank-features", str(root), *flag, "--hht", "none", "--out", str(tmp_path / unit[:1])]) == 0
+        cols = pd.read_parquet(tmp_path / unit[:1] / "features.parquet").columns
+        assert f"raw_rms[{unit}]" in cols and f"spec_pinion_order2[{unit}]" in cols and "tsa_pinion_fm4[1]" in cols
+        assert not any(c.endswith("[m/s^2]") for c in cols) or unit == "m/s^2"
+    assert "incomplete" not in capsys.readouterr().err
+
+
+def test_channel_unit_table():
+    """Units of the simulator's channel names; the healthy twin has its channel's unit; unknown names: None."""
+    from gearpit.commands.rank_features import channel_unit
+
+    assert [channel_unit(c) for c in ("acc_wheel_axial_m_s2", "mesh_deflection_m", "mesh_force_n",
+                                      "speed_pinion_rpm", "tacho_pinion", "acc_pinion_loa_m_s2@reference",
+                                      "accel")] == ["m/s^2", "m", "N", "rpm", "1", "m/s^2", None]
+
+
+def test_rank_features_warns_on_incomplete_dataset(tmp_path, capsys):
+    """A dataset with 6 of 18 samples finished (1 of 3 shards, no index.parquet) is ranked on the 6 with
+    `warning: incomplete dataset: 6 of 18 samples` on stderr, the same note heading feature_ranking.md, and the
+    counts in the `dataset` attribute of features.parquet. Before, it went on silently."""
+    root = tmp_path / "gen"
+    _write_generated(root, ["acc_pinion_loa_m_s2"], n_samples=18, finalize=False)
+    assert main(["rank-features", str(root), "--hht", "none", "--out", str(tmp_path / "out")]) == 0
+    err = capsys.readouterr().err
+    assert "warning: incomplete dataset: 6 of 18 samples" in err
+    md = (tmp_path / "out" / "feature_ranking.md").read_text()
+    assert md.startswith("**Note:** incomplete dataset: 6 of 18 samples")
+    table = pd.read_parquet(tmp_path / "out" / "features.parquet")
+    assert len(table) == 6 and table.attrs["dataset"] == {"n_finished": 6, "n_samples": 18}

@@ -6,7 +6,11 @@ Two dataset layouts are read:
 
 1. a ``gearpit generate`` dataset (``DATASET/metadata.json`` with
    ``"format": "gearpit-dataset"``): index, signals (``--channel``, default the
-   first) and tooth counts per ``pair`` through :mod:`datagen.dataset`;
+   first) and tooth counts per ``pair`` through :mod:`datagen.dataset`; the
+   features' unit follows the channel's (:func:`channel_unit`). A dataset still
+   being generated (or stopped) is ranked on its finished samples with a warning
+   ``incomplete dataset: N of M samples`` on stderr, in ``feature_ranking.md`` and
+   in the ``dataset`` attribute of ``features.parquet``;
 2. a plain layout for signals from elsewhere:
 
    - ``DATASET/index.parquet``: one row per record, in the order of the signals,
@@ -24,6 +28,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -36,6 +41,8 @@ from gearpit.errors import InputError, require
 from gearpit.tomlio import check_keys, read_toml
 
 META_KEYS = {"fs_hz", "z_pinion", "z_wheel", "signal_unit"}
+#: unit of a simulator channel from its name, which carries it (datagen.output_channels); longest suffix first
+CHANNEL_UNITS = (("_m_s2", "m/s^2"), ("_rpm", "rpm"), ("_n", "N"), ("_m", "m"))
 
 
 def register(sub) -> None:
@@ -77,8 +84,30 @@ def read_plain_dataset(path: Path) -> tuple[pd.DataFrame, np.ndarray, dict]:
     return index, signals, known
 
 
+def channel_unit(channel: str) -> str | None:
+    """Unit of a ``gearpit generate`` channel, read from the suffix its name carries (:mod:`datagen.output_channels`).
+
+    ``acc_*_m_s2`` -> ``"m/s^2"``, ``dte_m`` / ``mesh_deflection_m`` -> ``"m"``, ``*_n`` -> ``"N"``, ``*_rpm`` ->
+    ``"rpm"``, the 0/1 ``tacho_*`` pulses -> ``"1"``; a healthy twin ``<channel>@reference`` has its channel's
+    unit. None for a name without a known unit (the features then keep FeatureConfig's default).
+
+    Examples
+    --------
+    >>> [channel_unit(c) for c in ("acc_pinion_loa_m_s2", "dte_m", "force_bearing_wheel_loa_n", "dte_m@reference")]
+    ['m/s^2', 'm', 'N', 'm']
+    """
+    from datagen.sweep import REFERENCE_SUFFIX
+
+    name = channel.removesuffix(REFERENCE_SUFFIX)
+    if name.startswith("tacho_"):
+        return "1"
+    return next((unit for suffix, unit in CHANNEL_UNITS if name.endswith(suffix)), None)
+
+
 def read_generated_dataset(path: Path, channel: str | None) -> tuple[pd.DataFrame, np.ndarray, dict]:
-    """Index, one channel of signals, and fs of a ``gearpit generate`` dataset (tooth counts per pair)."""
+    """Index, one channel of signals, fs, the channel's unit and the sample counts (finished ``n_finished`` of
+    ``n_samples``, as ``gearpit dataset info`` counts them) of a ``gearpit generate`` dataset (tooth counts per
+    pair)."""
     from datagen import dataset as ds
 
     meta = ds.read_metadata(path)
@@ -90,11 +119,16 @@ def read_generated_dataset(path: Path, channel: str | None) -> tuple[pd.DataFram
     require(not unknown, "metadata.json pairs", sorted(pairs), f"tooth counts for every pair of the index ({unknown})")
     index["_z_pinion"] = index["pair"].map(lambda p: int(pairs[p]["z_pinion"]))
     index["_z_wheel"] = index["pair"].map(lambda p: int(pairs[p]["z_wheel"]))
-    return index, signals, {"fs_hz": float(meta["fs_hz"])}
+    out = {"fs_hz": float(meta["fs_hz"]), "n_finished": int(len(index)), "n_samples": int(meta["n_samples"])}
+    unit = channel_unit(channel if channel is not None else meta["channels"][0])
+    if unit is not None:
+        out["signal_unit"] = unit
+    return index, signals, out
 
 
 def read_dataset(path: Path, channel: str | None = None) -> tuple[pd.DataFrame, np.ndarray, dict]:
-    """Index (with ``_z_pinion``, ``_z_wheel`` per row), signals ``(n, n_samples)`` and ``fs_hz`` (+ unit)."""
+    """Index (with ``_z_pinion``, ``_z_wheel`` per row), signals ``(n, n_samples)`` and ``fs_hz`` (+ unit, and
+    the sample counts of a generated dataset)."""
     require(path.is_dir(), "DATASET", str(path), "an existing directory")
     if (path / "metadata.json").is_file():
         index, signals, meta = read_generated_dataset(path, channel)
@@ -133,6 +167,11 @@ def run(args) -> int:
     groups = index.groupby(["_z_pinion", "_z_wheel"], sort=True).indices
     configs = {key: build_config(args, meta, *key) for key in groups}  # validate every group before work
     out = args.out if args.out is not None else args.dataset / "feature_ranking"
+    note = None
+    if "n_samples" in meta and meta["n_finished"] < meta["n_samples"]:
+        note = (f"incomplete dataset: {meta['n_finished']} of {meta['n_samples']} samples "
+                "(the ranking uses the finished ones)")
+        print(f"warning: {note}", file=sys.stderr)
 
     fr = index["speed_rpm"].to_numpy(dtype=float) / 60.0
     parts = []
@@ -144,12 +183,14 @@ def run(args) -> int:
     table = pd.concat(parts).sort_index()
     labels = index.drop(columns=["_z_pinion", "_z_wheel"])
     full = pd.concat([labels, table], axis=1)
+    if "n_samples" in meta:
+        full.attrs["dataset"] = {"n_finished": meta["n_finished"], "n_samples": meta["n_samples"]}
     out.mkdir(parents=True, exist_ok=True)
     with atomic_path(out / "features.parquet") as tmp:
         full.to_parquet(tmp, index=False)
 
     ranking = rank_features(full, list(table.columns), seed=args.seed)
-    write_ranking(ranking, out / "feature_ranking.csv", out / "feature_ranking.md", top=args.top)
+    write_ranking(ranking, out / "feature_ranking.csv", out / "feature_ranking.md", top=args.top, note=note)
     from features.plots import plot_feature_ranking
 
     plot_feature_ranking(ranking, out / "feature_ranking.png", top=args.top)
