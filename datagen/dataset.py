@@ -74,7 +74,9 @@ def build_metadata(sweep) -> dict:
             "severity_bins": {b.name: [b.min_fraction, b.max_fraction] for b in sweep.severity_bins},
             "teeth_classes": {t.name: [t.low, t.high] for t in sweep.teeth_classes},
             "severity_definition": "max over the pitted teeth of (pitted pixels / active-flank pixels)",
-            "column_units": column_units(sweep)}
+            "column_units": column_units(sweep),
+            **({"plugins": [{"file": Path(p).name, "sha256": sha} for p, sha in sweep.plugins]}
+               if sweep.plugins else {})}
 
 
 # ---------------------------------------------------------------------- writing

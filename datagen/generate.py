@@ -67,9 +67,15 @@ def shard_samples(sweep: Sweep, shard: int) -> range:
 
 
 def compute_shard(sweep: Sweep, shard: int) -> ShardResult:
-    """Draw, build and simulate every sample of one shard (pure: same inputs, same bytes)."""
+    """Draw, build and simulate every sample of one shard (pure: same inputs, same bytes). The sweep's plugin files
+    are loaded first where this process has not loaded them (a ``forkserver`` or Dask worker), checked against the
+    digests the run began with."""
     from threadpoolctl import threadpool_limits
 
+    from datagen.effects.registry import ensure_plugin
+
+    for path, sha in sweep.plugins:
+        ensure_plugin(path, sha)
     t0, c0 = time.perf_counter(), time.process_time()
     with threadpool_limits(1):
         specs = [draw_sample(sweep, i) for i in shard_samples(sweep, shard)]

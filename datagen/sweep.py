@@ -19,6 +19,7 @@ are errors)::
     pairs = ["spur-gds"]                # preset names or {preset = ..., ...} tables
     channels = ["acc_pinion_loa_m_s2"]  # stored signal channels
     healthy_reference = false           # also store each sample's healthy twin (channels "<name>@reference")
+    plugins = ["my_effects.py"]         # optional: user effect files (relative to this file); [effects.NAME] may use them
 
     [classes]
     shapes = ["ellipse", "rectangle", "cluster"]
@@ -96,7 +97,7 @@ FORMAT_VERSION = 1
 
 _TOP = {"sweep", "classes", "pits", "operating", "effects", "drive_train", "stiffness"}
 _SWEEP = {"name", "seed", "samples_per_class", "shard_size", "fs_hz", "duration_s", "pairs", "channels",
-          "healthy_reference"}
+          "healthy_reference", "plugins"}
 #: suffix of the stored channels of the healthy twins (``healthy_reference = true``)
 REFERENCE_SUFFIX = "@reference"
 _CLASSES = {"shapes", "teeth", "max_pitted_teeth", "severity_bins"}
@@ -137,6 +138,8 @@ class Sweep:
     source: Mapping  # the TOML document as read (recorded in metadata.json)
     healthy_reference: bool = False
     stiffness: StiffnessOptions = StiffnessOptions()
+    #: user effect files (``[sweep] plugins``, and ``gearpit generate --plugin``): (resolved path, sha256) each
+    plugins: tuple[tuple[str, str], ...] = ()
 
     @property
     def stored_channels(self) -> tuple[str, ...]:
@@ -168,20 +171,27 @@ class Sweep:
     @property
     def fingerprint(self) -> str:
         """sha256 of the canonical JSON of the TOML document, the format version and the simulator's mesh record
-        (the record's default changed at stop 34: a dataset begun before must not be resumed with it)."""
-        text = json.dumps({"format_version": FORMAT_VERSION, "config": self.source,
-                           "stiffness": self.stiffness.to_dict()}, sort_keys=True)
+        (the record's default changed at stop 34: a dataset begun before must not be resumed with it), and the
+        contents of its plugin files (a changed effect is another dataset)."""
+        doc = {"format_version": FORMAT_VERSION, "config": self.source, "stiffness": self.stiffness.to_dict()}
+        if self.plugins:        # the effects' code, by content (a sweep without plugins keeps its fingerprint)
+            doc["plugins_sha256"] = sorted(sha for _, sha in self.plugins)
+        text = json.dumps(doc, sort_keys=True)
         return hashlib.sha256(text.encode()).hexdigest()
 
 
 # ---------------------------------------------------------------------- reading
-def load_sweep(path: str | Path) -> Sweep:
-    """Read and validate a sweep TOML file (raises :class:`InputError` on anything wrong)."""
-    return sweep_from_dict(read_toml(path))
+def load_sweep(path: str | Path, *, plugins: tuple[str | Path, ...] = ()) -> Sweep:
+    """Read and validate a sweep TOML file (raises :class:`InputError` on anything wrong). Its ``[sweep] plugins``
+    are paths relative to the file; ``plugins``: further effect files (``gearpit generate --plugin``)."""
+    return sweep_from_dict(read_toml(path), base_dir=Path(path).resolve().parent, plugins=plugins)
 
 
-def sweep_from_dict(doc: Mapping) -> Sweep:
-    """Validate a sweep document (the parsed TOML) and build the :class:`Sweep`."""
+def sweep_from_dict(doc: Mapping, *, base_dir: str | Path | None = None,
+                    plugins: tuple[str | Path, ...] = ()) -> Sweep:
+    """Validate a sweep document (the parsed TOML) and build the :class:`Sweep`. ``base_dir``: where the
+    document's ``[sweep] plugins`` paths start (default: the working directory); ``plugins``: further effect
+    files. Every plugin is loaded before the effects are read, so its effects are names of the sweep."""
     require(isinstance(doc, Mapping), "sweep file", type(doc).__name__, "a TOML document")
     check_keys(dict(doc), _TOP, "", required={"sweep", "classes", "operating"})
     sw = _table(doc, "sweep")
@@ -226,6 +236,7 @@ def sweep_from_dict(doc: Mapping) -> Sweep:
     check_keys(op, _OPERATING, "operating", required=_OPERATING)
     speed = read_draw(op["speed_rpm"], "operating.speed_rpm", "speed_rpm", "rpm", (1.0, 1e5))
     torque = read_draw(op["torque_nm"], "operating.torque_nm", "torque_nm", "N m", (1e-3, 1e6))
+    loaded = _plugins(sw.get("plugins", []), base_dir, plugins)
     effects = _effects(doc.get("effects", {}))
     drive = _drive_train(doc.get("drive_train", {}))
     stiffness = options_from_table(StiffnessOptions, dict(_table(doc, "stiffness")), "stiffness") \
@@ -238,7 +249,7 @@ def sweep_from_dict(doc: Mapping) -> Sweep:
                   teeth_classes=teeth, gear=gear, grid_px=(int(grid_px[0]), int(grid_px[1])), tolerance=tol,
                   depth_m=depth, aspect_w_to_s=aspect, profile=profile, speed_rpm=speed, torque_nm=torque,
                   effects=effects, drive_train=drive, source=json.loads(json.dumps(doc)), healthy_reference=twin,
-                  stiffness=stiffness)
+                  stiffness=stiffness, plugins=loaded)
     _check_feasible(sweep)
     return sweep
 
@@ -261,6 +272,21 @@ def _pairs(v) -> tuple[GearPair, ...]:
 
 def _field_bounds(f) -> tuple:
     return f.metadata.get("bounds", (-math.inf, math.inf))
+
+
+def _plugins(listed, base_dir, extra) -> tuple[tuple[str, str], ...]:
+    """Load the sweep's plugin files (``[sweep] plugins``, relative to ``base_dir``) and ``extra`` ones;
+    ``(resolved path, sha256)`` each, in order, without repeats."""
+    from datagen.effects.registry import ensure_plugin
+
+    require(isinstance(listed, list) and all(isinstance(p, str) for p in listed), "sweep.plugins", listed,
+            "a list of .py file paths (relative to the sweep file)")
+    base = Path(base_dir) if base_dir is not None else Path.cwd()
+    out: dict[str, str] = {}
+    for p in [base / q for q in listed] + [Path(q) for q in extra]:
+        path, sha = ensure_plugin(p)
+        out[path] = sha
+    return tuple(out.items())
 
 
 def _effects(table) -> tuple:

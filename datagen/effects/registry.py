@@ -11,6 +11,7 @@ Everything here is also importable from :mod:`datagen.effects.base` (the plugin 
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import importlib.util
 import sys
 from dataclasses import dataclass, fields
@@ -62,6 +63,40 @@ def get(name: str) -> type[Effect]:
 def names() -> list[str]:
     """All registered effect names, sorted."""
     return sorted(_REGISTRY)
+
+
+#: plugin files loaded in this process: resolved path -> sha256 of the bytes loaded
+_LOADED_PLUGINS: dict[str, str] = {}
+
+
+def plugin_digest(path: str | Path) -> str:
+    """sha256 of a plugin file's bytes (what a dataset records and a worker checks)."""
+    p = Path(path)
+    if not p.is_file() or p.suffix != ".py":
+        raise InputError("plugin", str(p), "an existing .py file")
+    return hashlib.sha256(p.read_bytes()).hexdigest()
+
+
+def ensure_plugin(path: str | Path, sha256: str | None = None) -> tuple[str, str]:
+    """Load a plugin file once per process (:func:`load_plugin`); ``(resolved path, sha256)``.
+
+    A worker process of a dataset run calls it for every plugin of the sweep: a forked worker finds it loaded, a
+    fresh one (``forkserver``, a Dask worker) loads it. ``sha256``: the digest the run recorded; a file that changed
+    since is refused (the dataset would mix two versions of the effect)."""
+    p = Path(path).resolve()
+    digest = plugin_digest(p)
+    if sha256 is not None and digest != sha256:
+        raise InputError("plugin", str(p), f"the file the run began with (sha256 {sha256[:12]}...; it changed to "
+                                           f"{digest[:12]}...)")
+    key = str(p)
+    if key in _LOADED_PLUGINS:
+        if _LOADED_PLUGINS[key] != digest:
+            raise InputError("plugin", key, f"the version loaded earlier in this process (sha256 "
+                                           f"{_LOADED_PLUGINS[key][:12]}...)")
+        return key, digest
+    load_plugin(p)
+    _LOADED_PLUGINS[key] = digest
+    return key, digest
 
 
 def load_plugin(path: str | Path) -> list[str]:

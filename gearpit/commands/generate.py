@@ -4,7 +4,9 @@ The sweep file is checked completely before anything is written. Runs on a
 local process pool (``--workers``, default 1), or on a Dask cluster
 (``--dask ADDRESS``, or ``--dask-local N`` for a LocalCluster of N workers);
 any of them gives the same bytes. Started again on the same ``--out``, a killed
-run computes only the missing shards.
+run computes only the missing shards. User effects (``--plugin FILE.py``, or ``plugins = [...]`` in the sweep's
+``[sweep]`` table) join the registry before the sweep is read, in every worker too; a plugin file that changed
+since the run began is refused on resume (the fingerprint holds its contents).
 """
 from __future__ import annotations
 
@@ -22,6 +24,9 @@ def register(sub) -> None:
     p.add_argument("--dask-local", metavar="N", type=int, default=None,
                    help="run on a Dask LocalCluster of N single-threaded worker processes")
     p.add_argument("--max-shards", type=int, default=None, help="stop after N shards (resume later)")
+    p.add_argument("--plugin", type=Path, action="append", default=[], metavar="FILE.py",
+                   help="a user effect file (repeatable), as the sweep's [sweep] plugins list; its effects can be "
+                        "[effects.NAME] tables of the sweep; the dataset records each file's sha256")
     p.add_argument("--quiet", action="store_true", help="no progress line")
     p.add_argument("--json", action="store_true", help="print a JSON summary on stdout")
     p.set_defaults(func=run)
@@ -33,7 +38,7 @@ def run(args) -> int:
     from gearpit.errors import require
 
     require(args.max_shards is None or args.max_shards >= 1, "--max-shards", args.max_shards, "an integer >= 1")
-    sweep = load_sweep(args.sweep)
+    sweep = load_sweep(args.sweep, plugins=tuple(args.plugin))
     report = generate(sweep, args.out, workers=args.workers, dask_address=args.dask,
                       dask_local_workers=args.dask_local, progress=not args.quiet, max_shards=args.max_shards)
     summary = {"out": str(report.out), "n_samples": report.n_samples, "n_shards": report.n_shards,
