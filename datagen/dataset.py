@@ -197,10 +197,35 @@ def _channel_position(meta: dict, channel: str | None) -> int:
     return channels.index(channel)
 
 
+def shard_damage(path: str | Path, shard: int) -> str:
+    """What is wrong with the signals file of a finished shard ('' if nothing): its size against the size its
+    ``.npy`` header declares (a truncated copy or a full disk), or an unreadable header."""
+    f = Path(path) / SHARDS / shard_name("signals", shard)
+    if not f.is_file():
+        return f"{f.name} missing"
+    size = f.stat().st_size
+    try:
+        with open(f, "rb") as fh:
+            version = np.lib.format.read_magic(fh)
+            if version not in ((1, 0), (2, 0)):     # np.save writes 1.0 (2.0 for a huge header)
+                return ""
+            read = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+            shape, _, dtype = read(fh)
+            expected = fh.tell() + int(np.prod(shape)) * np.dtype(dtype).itemsize
+    except (ValueError, OSError, EOFError, SyntaxError) as exc:
+        return f"{f.name} unreadable ({size} bytes; {exc})"
+    if size != expected:
+        return f"{f.name} holds {size} bytes, its header declares {expected} ({list(shape)} {np.dtype(dtype).name})"
+    return ""
+
+
 def open_shard(path: str | Path, shard: int) -> np.ndarray:
     """Memory-mapped signals of one shard, float32 ``(n, n_channels, n_time)``."""
     f = Path(path) / SHARDS / shard_name("signals", shard)
     require(f.is_file(), "shard", shard, "a finished shard of this dataset")
+    damage = shard_damage(path, shard)
+    require(not damage, "shard", str(f), f"a whole signals file; {damage}: damaged or truncated, generate the "
+            "dataset again")
     return np.load(f, mmap_mode="r")
 
 
@@ -277,6 +302,7 @@ def dataset_info(path: str | Path) -> dict:
         for k, n in keys.value_counts().items():
             counts[k] = int(n)
     units = meta.get("column_units", {})
+    damaged = {int(k): d for k in sorted(finished_shards(root)) if (d := shard_damage(root, k))}
     ranges = {}
     skip = {"sample_index", "seed", "shard", "class_index", "pit_seed", "simulation_seed"}
     for col in index.columns:
@@ -289,6 +315,7 @@ def dataset_info(path: str | Path) -> dict:
     return {"path": str(root), "name": meta["name"], "seed": meta["seed"], "software": meta["software"],
             "fingerprint": meta["fingerprint"], "n_samples": meta["n_samples"], "n_finished": int(len(index)),
             "n_shards": meta["n_shards"], "finished_shards": len(finished_shards(root)),
-            "complete": (root / INDEX).is_file(), "n_classes": len(meta["classes"]),
+            "complete": (root / INDEX).is_file() and not damaged, "damaged_shards": damaged,
+            "n_classes": len(meta["classes"]),
             "samples_per_class": meta["samples_per_class"], "channels": meta["channels"], "fs_hz": meta["fs_hz"],
             "n_time": meta["n_time"], "class_counts": counts, "ranges": ranges, "size_bytes": disk_bytes(root)}

@@ -268,6 +268,19 @@ class FeatureClassifier:
         return self.predict_features(features, warnings)
 
 
+def trainable(data: SignalSet, task: str) -> SignalSet:
+    """``data`` with the classes of ``task`` (``binary``: healthy / damaged); refused before any work when it lacks
+    the labels or holds fewer than two classes (a baseline cannot be fitted on one)."""
+    require(data.has_labels() and data.has_teeth_labels(), "labels", list(data.labels.columns),
+            "severity_class and teeth labels")
+    if task == "binary":
+        data = data.as_binary()
+    classes = data.severity_class_names()
+    require(len(classes) >= 2, "severity_class", classes, "at least two classes in the training data"
+            + (" (--task binary needs healthy and damaged records)" if task == "binary" else ""))
+    return data
+
+
 def fit_baseline(data: SignalSet, kind: str, *, features: np.ndarray, feature_names: list[str], feature_config: dict,
                  task: str = "multi", seed: int = 0) -> FeatureClassifier:
     """Fit one baseline on a feature table; return it exported to arrays (checked against scikit-learn).
@@ -285,12 +298,9 @@ def fit_baseline(data: SignalSet, kind: str, *, features: np.ndarray, feature_na
     seed : int
     """
     require(kind in KINDS, "kind", kind, "one of: " + ", ".join(KINDS))
-    require(data.has_labels() and data.has_teeth_labels(), "labels", list(data.labels.columns),
-            "severity_class and teeth labels")
     x = np.asarray(features, dtype=float)
     require(x.shape == (len(data), len(feature_names)), "features", x.shape, f"({len(data)}, {len(feature_names)})")
-    if task == "binary":
-        data = data.as_binary()
+    data = trainable(data, task)
     classes = data.severity_class_names()
     lut = {c: i for i, c in enumerate(classes)}
     y_sev = np.array([lut[c] for c in data.labels["severity_class"].astype(str)], dtype=np.int64)
@@ -314,6 +324,7 @@ def fit_baseline(data: SignalSet, kind: str, *, features: np.ndarray, feature_na
         arrays.update(_export(kind, task_key, est, xi[0]))
 
     arrays.update(_fit_feature_novelty(xi, y_sev, seed))
+    n_held_out = int(round(NOVELTY_HELD_OUT * len(data)))
 
     spec = ModelSpec(model_type=kind, task=task, fs_hz=float(data.fs_hz), n_samples=data.n_samples, pair=data.pair,
                      representation={**feature_config, "feature_names": list(feature_names)},
@@ -321,8 +332,9 @@ def fit_baseline(data: SignalSet, kind: str, *, features: np.ndarray, feature_na
                      severity_scale=float(sev.max()) if sev.max() > 0 else 1.0, channel=data.channel,
                      ranges=training_ranges(data.labels), train_config={"kind": kind, "seed": seed, "task": task},
                      training={"n_train": len(data), "source": data.source,
-                               **({"novelty": FeatureClassifier(None, arrays).novelty_model().summary()}
-                                  if NOVELTY_PREFIX + "means" in arrays else {})})
+                               "novelty": FeatureClassifier(None, arrays).novelty_model().summary()
+                               if NOVELTY_PREFIX + "means" in arrays else
+                               f"not fitted: {n_held_out} held-out records, fewer than {MIN_HELD_OUT}"})
     model = FeatureClassifier(spec, arrays)
     # the exported arrays must reproduce scikit-learn's predictions
     check = model.predict_features(x[: min(64, len(x))])

@@ -136,7 +136,9 @@ def report_markdown(metrics: dict, *, title: str = "Evaluation") -> str:
              f"| severity class | {s['accuracy']:.4f} | {s['macro_f1']:.4f} |"]
     lines += [f"| pitted teeth | {t['accuracy']:.4f} | {t['macro_f1']:.4f} |" if t else "| pitted teeth | not labelled | - |", ""]
     if "severity_mae" in metrics:
-        lines += [f"Severity MAE: {metrics['severity_mae']:.4f} (pitted fraction)", ""]
+        n_mae = metrics.get("severity_mae_n", metrics["n_records"])
+        lines += [f"Severity MAE: {metrics['severity_mae']:.4f} (pitted fraction; over the {n_mae} of "
+                  f"{metrics['n_records']} records with a known severity)", ""]
     lines += [f"Mean confidence: {metrics['mean_confidence']:.3f}; records with warnings: {metrics['n_warnings']}", ""]
     if "novelty" in metrics:
         nv = metrics["novelty"]

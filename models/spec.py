@@ -133,6 +133,11 @@ def channel_quantity(channel: str | None) -> str | None:
     return None
 
 
+def _a(quantity: str) -> str:
+    """``quantity`` with its indefinite article ("an acceleration", "a displacement")."""
+    return f"{'an' if quantity[0] in 'aeiou' else 'a'} {quantity}"
+
+
 #: relative margin of the trained ranges (a measured speed of 1199.999 rpm is inside [1200, 1500])
 RANGE_TOLERANCE = 1e-3
 
@@ -152,14 +157,14 @@ def check_input(spec: ModelSpec, data: SignalSet, *, allow_mismatch: bool = Fals
     common: list[str] = []
     trained_q, given_q = channel_quantity(spec.channel), channel_quantity(data.channel)
     if trained_q and given_q and trained_q != given_q:  # e.g. a transmission-error model fed accelerations
-        raise InputError("channel", data.channel, f"a {trained_q} channel like the trained {spec.channel} "
-                         f"(this one is a {given_q})")
+        raise InputError("channel", data.channel, f"{_a(trained_q)} channel like the trained {spec.channel} "
+                         f"(this one is {_a(given_q)})")
     p, q = spec.pair, data.pair
     if (p.z_pinion, p.z_wheel) != (q.z_pinion, q.z_wheel):
         msg = f"gear pair {q.name} ({q.z_pinion}/{q.z_wheel} teeth) differs from the trained {p.name} ({p.z_pinion}/{p.z_wheel})"
         if not allow_mismatch:
             raise InputError("pair", f"{q.name} {q.z_pinion}/{q.z_wheel}",
-                             f"the trained pair {p.name} {p.z_pinion}/{p.z_wheel} teeth (or allow_mismatch)")
+                             f"the trained pair {p.name} {p.z_pinion}/{p.z_wheel} teeth (or --allow-mismatch)")
         common.append(msg)
     elif p.name != q.name:
         common.append(f"gear pair named {q.name}, trained on {p.name} (same tooth counts)")
@@ -169,7 +174,7 @@ def check_input(spec: ModelSpec, data: SignalSet, *, allow_mismatch: bool = Fals
         msg = f"fs {data.fs_hz:g} Hz differs from the trained {spec.fs_hz:g} Hz"
         if kind in FS_BOUND or not allow_mismatch:
             raise InputError("fs_hz", data.fs_hz, f"{spec.fs_hz:g} Hz (the model's training sampling rate)"
-                             + ("" if kind in FS_BOUND else ", or allow_mismatch"))
+                             + ("" if kind in FS_BOUND else ", or --allow-mismatch"))
         common.append(msg)
     if spec.model_type == "cnn":
         if spec.representation.get("reference"):

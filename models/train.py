@@ -226,7 +226,8 @@ def train_cnn(data: SignalSet, config: TrainConfig = TrainConfig(), *, log=None)
     if config.task == "binary":
         data = data.as_binary()
     classes = data.severity_class_names()
-    require(len(classes) >= 2, "severity_class", classes, "at least two classes in the training data")
+    require(len(classes) >= 2, "severity_class", classes, "at least two classes in the training data"
+            + (" (--task binary needs healthy and damaged records)" if config.task == "binary" else ""))
     sev_all = data.labels["severity"].to_numpy(dtype=float) if "severity" in data.labels else np.zeros(len(data))
     scale = float(sev_all.max()) if sev_all.max() > 0 else 1.0
     y_cls, y_sev, y_teeth = _targets(data, classes, scale)

@@ -37,7 +37,10 @@ def format_info(info: dict) -> str:
              f"  samples {info['n_finished']}/{info['n_samples']} ({info['finished_shards']}/{info['n_shards']} shards)"
              f", {info['n_classes']} classes x {info['samples_per_class']}",
              f"  signals: {', '.join(info['channels'])}; {info['n_time']} samples at {info['fs_hz']:g} Hz float32",
-             f"  size on disk: {info['size_bytes'] / 1e6:.2f} MB", "", "class counts (pair / severity / teeth / shape):"]
+             f"  size on disk: {info['size_bytes'] / 1e6:.2f} MB"]
+    for shard, damage in info.get("damaged_shards", {}).items():
+        lines.append(f"  DAMAGED shard {shard}: {damage} (generate the dataset again)")
+    lines += ["", "class counts (pair / severity / teeth / shape):"]
     for key, n in info["class_counts"].items():
         lines.append(f"  {key:<48} {n}")
     lines += ["", "parameter ranges:"]

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 from pathlib import Path
 
 from gearpit.errors import require
@@ -44,35 +45,77 @@ def predict_any(model, data, *, crops: int, allow_mismatch: bool, threads: int =
 
 
 def resolve_channel(model, paths: list[Path], channel: str | None) -> str | None:
-    """The channel to read from a dataset: the flag, else the model's training channel if stored."""
+    """The channel to read from a dataset: the flag, else the model's training channel.
+
+    Raises
+    ------
+    InputError
+        The dataset does not store the trained channel (and no ``--channel`` names another): naming both the
+        trained channel and the stored ones.
+    """
     if channel is not None or len(paths) != 1 or not (paths[0] / "metadata.json").is_file():
         return channel
     from datagen.dataset import read_metadata
 
     stored = read_metadata(paths[0])["channels"]
-    return model.spec.channel if model.spec.channel in stored else None
+    trained = model.spec.channel
+    if trained is None:          # a model saved before the channel was recorded: the dataset's first
+        return None
+    require(trained in stored, "channel", f"{trained} (the model's training channel)",
+            f"a channel {paths[0]} stores: it stores {', '.join(stored)}; name one with --channel to evaluate on it")
+    return trained
+
+
+def no_novelty_note(model) -> str | None:
+    """One line for a model without a novelty check (:mod:`models.novelty`), with the reason recorded in training;
+    None when it has one."""
+    from models.classifier import CNNClassifier
+
+    has = model.novelty is not None if isinstance(model, CNNClassifier) else model.novelty_model() is not None
+    if has:
+        return None
+    why = model.spec.training.get("novelty")
+    why = why if isinstance(why, str) else "saved without one"
+    return (f"note: this model has no novelty check ({why}): no novelty column, no warning for records unlike "
+            "the training records")
+
+
+def load_data_without_meta(paths, **kw):
+    """:func:`models.sources.load_data`, its missing-sidecar message worded for a command without ``--meta``."""
+    from gearpit.errors import InputError
+    from models.sources import load_data
+
+    try:
+        return load_data(paths, **kw)
+    except InputError as exc:
+        if exc.field != "--meta":
+            raise
+        raise InputError("sidecar", exc.value, exc.allowed.replace(" given with --meta or found beside the file as",
+                                                                   " beside the file, named")) from None
 
 
 def run(args) -> int:
     from models.evaluate import evaluate, report_markdown, write_report
-    from models.io import load_model
+    from models.io import check_out_dir, load_model
     from models.plots import plot_breakdown, plot_confusions
-    from models.sources import load_data
 
     require(args.crops >= 1, "--crops", args.crops, "an integer >= 1")
+    out = check_out_dir(args.out if args.out is not None else args.model / "eval", "--out")
     model = load_model(args.model)
-    data = load_data(args.data, channel=resolve_channel(model, args.data, args.channel), pair=args.pair,
-                     refine_speed=not args.sidecar_speed)
+    data = load_data_without_meta(args.data, channel=resolve_channel(model, args.data, args.channel), pair=args.pair,
+                                  refine_speed=not args.sidecar_speed)
     require(data.has_labels(), "DATA", data.source, "labelled records (a severity_class label at least)")
     pred = predict_any(model, data, crops=args.crops, allow_mismatch=args.allow_mismatch, threads=args.threads)
     metrics = evaluate(data, pred)
     metrics["model"] = str(args.model)
-    out = args.out if args.out is not None else args.model / "eval"
+    note = no_novelty_note(model)
+    if note:
+        print(note, file=sys.stderr)
     write_report(metrics, pred, data, out, title=f"Evaluation of {args.model.name} on {data.source}")
     plot_confusions(metrics, out / "confusion.png")
     plot_breakdown(metrics, out / "breakdown.png")
     print(report_markdown(metrics).split("## Severity class confusion")[0].rstrip())
     print(json.dumps({"accuracy": metrics["severity_class"]["accuracy"], "macro_f1": metrics["severity_class"]["macro_f1"],
                       "teeth_accuracy": metrics.get("teeth", {}).get("accuracy"), "severity_mae": metrics.get("severity_mae"),
-                      "out": str(out)}))
+                      "severity_mae_n": metrics.get("severity_mae_n"), "out": str(out)}))
     return 0

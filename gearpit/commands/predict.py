@@ -17,6 +17,8 @@ import os
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from gearpit.errors import require
 
 
@@ -40,14 +42,15 @@ def register(sub) -> None:
 
 def run(args) -> int:
     from gearpit.atomic import atomic_path
-    from gearpit.commands.evaluate import predict_any, resolve_channel
-    from models.io import load_model
-    from models.sources import load_data
+    from gearpit.commands.evaluate import load_data_without_meta, no_novelty_note, predict_any, resolve_channel
+    from models.io import check_out_dir, load_model
 
     require(args.crops >= 1, "--crops", args.crops, "an integer >= 1")
+    if args.out is not None:
+        check_out_dir(args.out, "--out", file=True)
     model = load_model(args.model)
-    data = load_data(args.files, channel=resolve_channel(model, args.files, args.channel),
-                     refine_speed=not args.sidecar_speed)
+    data = load_data_without_meta(args.files, channel=resolve_channel(model, args.files, args.channel),
+                                  refine_speed=not args.sidecar_speed)
     pred = predict_any(model, data, crops=args.crops, allow_mismatch=args.allow_mismatch, threads=args.threads)
     table = pred.to_frame()
     names = data.labels["file"] if "file" in data.labels else data.labels.get("sample_index", table.index)
@@ -66,7 +69,6 @@ def run(args) -> int:
         cols = ["record", "severity_class", "confidence", "severity", "teeth_class", "teeth_confidence"]
         cols += [c for c in ("novelty", "speed_rpm", "speed_method") if c in table]
         print(table[cols].to_string(index=False, float_format=lambda v: f"{v:.3f}"))
-    n_warn = int((table["warning"] != "").sum())
     for rec, w in zip(table["record"], table["warning"]):
         if w:
             print(f"warning: {rec}: {w}", file=sys.stderr)
@@ -74,7 +76,35 @@ def run(args) -> int:
 
     if pred.novelty_batch is not None and pred.novelty_batch["shifted"]:
         print("warning: " + batch_warning(pred.novelty_batch), file=sys.stderr)
-    if n_warn:
-        print(f"warning: {n_warn} of {len(table)} records outside the trained conditions or unlike the training "
-              "records (novelty > 1); treat them with care", file=sys.stderr)
+    summary = warning_summary(pred, data)
+    if summary:
+        print(f"warning: {summary}; treat them with care", file=sys.stderr)
+    note = no_novelty_note(model)
+    if note:
+        print(note, file=sys.stderr)
     return 0
+
+
+#: the per-record notes of :func:`models.spec.check_input` that come from a label column, and what they are
+NOTE_COLUMNS = (("speed_note", "a speed note"), ("pair_note", "a pair note"), ("clip_note", "clipped"),
+                ("drift_note", "drift removed"))
+
+
+def warning_summary(pred, data) -> str:
+    """How many records carry a warning, counted by what the warnings are (beyond the trained ranges, a note on
+    the sidecar's speed or pair, clipping, drift, an allowed mismatch, novelty > 1); '' if none."""
+    n = len(data)
+    w = [str(v) for v in pred.warnings]
+    kinds = [("beyond the trained ranges", np.array(["outside the trained range" in v for v in w]))]
+    for col, what in NOTE_COLUMNS:
+        if col in data.labels:
+            kinds.append((what, data.labels[col].fillna("").astype(str).to_numpy() != ""))
+    kinds.append(("another fs or pair (allowed)", np.array(["differs from the trained" in v or "gear pair named" in v
+                                                            for v in w])))
+    if pred.novelty is not None:
+        kinds.append(("unlike the training records (novelty > 1)", np.asarray(pred.novelty) > 1.0))
+    n_warn = sum(1 for v in w if v)
+    if not n_warn:
+        return ""
+    counts = [f"{int(m.sum())} {what}" for what, m in kinds if m.any()]
+    return f"{n_warn} of {n} records with warnings" + (f" ({', '.join(counts)})" if counts else "")
