@@ -187,12 +187,16 @@ def generate(sweep: Sweep, out: str | Path, *, workers: int = 1, dask_address: s
     else:
         results = _run_pool(sweep, todo, workers)
     computed, cpu = 0, 0.0
-    for res in results:
-        dataset.write_shard(out, res.shard, res.signals, res.rows, res.masks)
-        computed += 1
-        cpu += res.cpu_seconds
-        bar.update(len(res.rows))
-    bar.close()
+    try:
+        for res in results:
+            dataset.write_shard(out, res.shard, res.signals, res.rows, res.masks)
+            computed += 1
+            cpu += res.cpu_seconds
+            bar.update(len(res.rows))
+    finally:  # stopped while writing a shard: stop the workers now, not when the traceback is freed
+        if hasattr(results, "close"):
+            results.close()
+        bar.close()
     if len(dataset.finished_shards(out)) == sweep.n_shards:
         dataset.finalize(out)
     return RunReport(Path(out), sweep.n_shards, computed, len(done), sweep.n_samples, time.monotonic() - t0, cpu)
@@ -219,8 +223,17 @@ def pool_context() -> multiprocessing.context.BaseContext:
 
 def _run_pool(sweep: Sweep, todo: list[int], workers: int):
     """Shards on a local process pool (:func:`pool_context`); at most ``2 * workers`` in flight (memory stays
-    bounded)."""
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=pool_context())
+    bounded).
+
+    The workers ignore Ctrl-C and die with this process (:func:`gearpit.interrupt.reset_in_worker`). Stopped
+    early (an error, Ctrl-C, SIGTERM under the command line, the caller closing this generator), it terminates
+    the workers and drops their shards: a worker left running would block for ever writing its result into a
+    pipe nobody reads (~230 MB each on ``sw2.toml``).
+    """
+    from gearpit.interrupt import reset_in_worker
+
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=pool_context(), initializer=reset_in_worker)
+    finished_all = False
     try:
         pending, queue = set(), list(todo)
         while queue or pending:
@@ -229,8 +242,25 @@ def _run_pool(sweep: Sweep, todo: list[int], workers: int):
             finished, pending = wait(pending, return_when=FIRST_COMPLETED)
             for f in sorted(finished, key=lambda f: f.result().shard):
                 yield f.result()
-    finally:  # on an error or Ctrl-C: drop the queued shards, do not wait for them
+        finished_all = True
+    finally:
+        if not finished_all:
+            _terminate_workers(pool)
         pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _terminate_workers(pool: ProcessPoolExecutor) -> None:
+    """SIGTERM every live worker of ``pool`` and reap it (the executor has no public call for this before
+    Python 3.14's ``terminate_workers``)."""
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    for p in procs:
+        if p.is_alive():
+            p.terminate()
+    for p in procs:
+        p.join(timeout=5.0)
+        if p.is_alive():
+            p.kill()
+            p.join()
 
 
 def _run_dask(sweep: Sweep, todo: list[int], address: str | None, local_workers: int | None):

@@ -4,7 +4,9 @@ The sweep file is checked completely before anything is written. Runs on a
 local process pool (``--workers``, default 1), or on a Dask cluster
 (``--dask ADDRESS``, or ``--dask-local N`` for a LocalCluster of N workers);
 any of them gives the same bytes. Started again on the same ``--out``, a killed
-run computes only the missing shards.
+run computes only the missing shards. Stopped by Ctrl-C or SIGTERM, it stops its
+workers, keeps the shards written so far and says how many there are (exit 130
+or 143).
 """
 from __future__ import annotations
 
@@ -34,8 +36,14 @@ def run(args) -> int:
 
     require(args.max_shards is None or args.max_shards >= 1, "--max-shards", args.max_shards, "an integer >= 1")
     sweep = load_sweep(args.sweep)
-    report = generate(sweep, args.out, workers=args.workers, dask_address=args.dask,
-                      dask_local_workers=args.dask_local, progress=not args.quiet, max_shards=args.max_shards)
+    try:
+        report = generate(sweep, args.out, workers=args.workers, dask_address=args.dask,
+                          dask_local_workers=args.dask_local, progress=not args.quiet, max_shards=args.max_shards)
+    except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM: what is kept, for the line gearpit.cli prints
+        from datagen.dataset import finished_shards
+
+        exc.note = f"{len(finished_shards(args.out))} of {sweep.n_shards} shards written; rerun the same command to resume"
+        raise
     summary = {"out": str(report.out), "n_samples": report.n_samples, "n_shards": report.n_shards,
                "computed_shards": report.computed, "skipped_shards": report.skipped,
                "complete": report.computed + report.skipped == report.n_shards, "seconds": round(report.seconds, 3)}
