@@ -18,7 +18,7 @@ import sys
 import threading
 import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +27,11 @@ from datagen import dataset
 from datagen.sampling import build_pit_map, draw_sample, healthy_twin, sample_row
 from datagen.sweep import Sweep
 from gearpit.errors import require
+
+
+#: index column: the codes of the sample's simulation warnings (:mod:`datagen.plausibility`), comma-separated;
+#: "" for a plausible record
+WARNINGS_COLUMN = "simulation_warnings"
 
 
 @dataclass(frozen=True)
@@ -92,6 +97,8 @@ def compute_shard(sweep: Sweep, shard: int) -> ShardResult:
     require(not bad.any(), "samples", [specs[j].index for j in np.nonzero(bad)[0]],
             "finite signals (the simulation of these samples diverged)")
     rows = [sample_row(sweep, s, m) for s, m in zip(specs, maps)]
+    for row, sig in zip(rows, signals):   # the sample's own record (not its healthy twin's)
+        row[WARNINGS_COLUMN] = ",".join(sorted({w["code"] for w in sig.metadata["warnings"]}))
     masks = [{"sample_index": s.index, "tooth": t, "rows": sweep.grid_px[0], "cols": sweep.grid_px[1],
               "mask_packbits_zlib": dataset.encode_mask(m.mask(t))} for s, m in zip(specs, maps) for t in s.teeth]
     return ShardResult(shard, out, rows, masks, time.perf_counter() - t0, time.process_time() - c0)
@@ -99,7 +106,9 @@ def compute_shard(sweep: Sweep, shard: int) -> ShardResult:
 
 @dataclass(frozen=True)
 class RunReport:
-    """What a run did: shards computed now and earlier, samples, wall time and the workers' CPU time (s)."""
+    """What a run did: shards computed now and earlier, samples, wall time and the workers' CPU time (s), and
+    the samples computed now whose simulation warned (:data:`WARNINGS_COLUMN`): ``flagged`` of
+    ``computed_samples``, ``warnings`` per code."""
 
     out: Path
     n_shards: int
@@ -108,6 +117,9 @@ class RunReport:
     n_samples: int
     seconds: float
     cpu_seconds: float
+    computed_samples: int = 0
+    flagged: int = 0
+    warnings: dict = field(default_factory=dict)
 
 
 class Progress:
@@ -186,12 +198,18 @@ def generate(sweep: Sweep, out: str | Path, *, workers: int = 1, dask_address: s
         results = (compute_shard(sweep, k) for k in todo)
     else:
         results = _run_pool(sweep, todo, workers)
-    computed, cpu = 0, 0.0
+    computed, cpu, n_rows, flagged, warnings = 0, 0.0, 0, 0, {}
     try:
         for res in results:
             dataset.write_shard(out, res.shard, res.signals, res.rows, res.masks)
             computed += 1
             cpu += res.cpu_seconds
+            n_rows += len(res.rows)
+            for row in res.rows:
+                codes = [c for c in row[WARNINGS_COLUMN].split(",") if c]
+                flagged += bool(codes)
+                for c in codes:
+                    warnings[c] = warnings.get(c, 0) + 1
             bar.update(len(res.rows))
     finally:  # stopped while writing a shard: stop the workers now, not when the traceback is freed
         if hasattr(results, "close"):
@@ -199,7 +217,8 @@ def generate(sweep: Sweep, out: str | Path, *, workers: int = 1, dask_address: s
         bar.close()
     if len(dataset.finished_shards(out)) == sweep.n_shards:
         dataset.finalize(out)
-    return RunReport(Path(out), sweep.n_shards, computed, len(done), sweep.n_samples, time.monotonic() - t0, cpu)
+    return RunReport(Path(out), sweep.n_shards, computed, len(done), sweep.n_samples, time.monotonic() - t0, cpu,
+                     n_rows, flagged, dict(sorted(warnings.items())))
 
 
 def pool_context() -> multiprocessing.context.BaseContext:

@@ -6,11 +6,14 @@ local process pool (``--workers``, default 1), or on a Dask cluster
 any of them gives the same bytes. Started again on the same ``--out``, a killed
 run computes only the missing shards. Stopped by Ctrl-C or SIGTERM, it stops its
 workers, keeps the shards written so far and says how many there are (exit 130
-or 143).
+or 143). Samples whose simulation is physically implausible
+(:mod:`datagen.plausibility`) are kept, flagged in the index column
+``simulation_warnings`` and counted in one line at the end.
 """
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 
@@ -46,11 +49,19 @@ def run(args) -> int:
         raise
     summary = {"out": str(report.out), "n_samples": report.n_samples, "n_shards": report.n_shards,
                "computed_shards": report.computed, "skipped_shards": report.skipped,
-               "complete": report.computed + report.skipped == report.n_shards, "seconds": round(report.seconds, 3)}
+               "complete": report.computed + report.skipped == report.n_shards, "seconds": round(report.seconds, 3),
+               "flagged_samples": report.flagged, "warnings": report.warnings}
     if args.json:
         print(json.dumps(summary))
     else:
         state = "complete" if summary["complete"] else "incomplete (run again to resume)"
         print(f"{report.out}: {report.n_samples} samples in {report.n_shards} shards, {report.computed} computed now, "
               f"{report.skipped} earlier; {state}; {report.seconds:.1f} s")
+    if report.flagged:
+        from datagen.generate import WARNINGS_COLUMN
+
+        counts = ", ".join(f"{code} {n}" for code, n in report.warnings.items())
+        print(f"gearpit generate: warning: {report.flagged} of the {report.computed_samples} samples computed now "
+              f"are physically implausible ({counts}); the index column {WARNINGS_COLUMN} names them, and "
+              "`gearpit simulate` of such a case says why", file=sys.stderr)
     return 0

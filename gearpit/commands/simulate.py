@@ -6,11 +6,17 @@ an earlier ``STEM.png`` that this run does not redraw (no ``--png``) is removed
 with them, so ``--out`` never mixes two runs. Stopped (Ctrl-C, SIGTERM), the run
 leaves the folder as it was; the temporaries of a killed run (SIGKILL) are
 removed by the next run of the same case into the same folder.
+
+A record that is no physical gear pair's (a mesh that pulls without a
+contact-loss law, an unconverged solution, a load beyond the teeth's strength:
+:mod:`datagen.plausibility`) is still written, with one warning per finding on
+stderr and in the JSON's ``warnings``.
 """
 from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 from gearpit.atomic import atomic_set, remove_leftovers
@@ -74,6 +80,8 @@ def run(args: argparse.Namespace) -> int:
             plot_signals(sig, tmp[files["png"]], channel=args.channel, title=f"{stem}: {args.channel}")
     print(f"wrote {args.out / stem}.{{csv,npz,json{',png' if args.png else ''}}}: "
           f"{sig.n_samples} samples at {sig.fs_hz:g} Hz, {len(sig.channels)} channels")
+    for w in sig.metadata["warnings"]:       # also in the JSON and the NPZ metadata ("warnings")
+        print(f"gearpit simulate: warning: {w['message']} [{w['code']}]", file=sys.stderr)
     return 0
 
 
