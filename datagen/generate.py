@@ -18,7 +18,7 @@ import sys
 import threading
 import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +27,11 @@ from datagen import dataset
 from datagen.sampling import build_pit_map, draw_sample, healthy_twin, sample_row
 from datagen.sweep import Sweep
 from gearpit.errors import require
+
+
+#: index column: the codes of the sample's simulation warnings (:mod:`datagen.plausibility`), comma-separated;
+#: "" for a plausible record
+WARNINGS_COLUMN = "simulation_warnings"
 
 
 @dataclass(frozen=True)
@@ -98,6 +103,8 @@ def compute_shard(sweep: Sweep, shard: int) -> ShardResult:
     require(not bad.any(), "samples", [specs[j].index for j in np.nonzero(bad)[0]],
             "finite signals (the simulation of these samples diverged)")
     rows = [sample_row(sweep, s, m) for s, m in zip(specs, maps)]
+    for row, sig in zip(rows, signals):   # the sample's own record (not its healthy twin's)
+        row[WARNINGS_COLUMN] = ",".join(sorted({w["code"] for w in sig.metadata["warnings"]}))
     masks = [{"sample_index": s.index, "tooth": t, "rows": sweep.grid_px[0], "cols": sweep.grid_px[1],
               "mask_packbits_zlib": dataset.encode_mask(m.mask(t))} for s, m in zip(specs, maps) for t in s.teeth]
     return ShardResult(shard, out, rows, masks, time.perf_counter() - t0, time.process_time() - c0)
@@ -105,7 +112,9 @@ def compute_shard(sweep: Sweep, shard: int) -> ShardResult:
 
 @dataclass(frozen=True)
 class RunReport:
-    """What a run did: shards computed now and earlier, samples, wall time and the workers' CPU time (s)."""
+    """What a run did: shards computed now and earlier, samples, wall time and the workers' CPU time (s), and
+    the samples computed now whose simulation warned (:data:`WARNINGS_COLUMN`): ``flagged`` of
+    ``computed_samples``, ``warnings`` per code."""
 
     out: Path
     n_shards: int
@@ -114,6 +123,9 @@ class RunReport:
     n_samples: int
     seconds: float
     cpu_seconds: float
+    computed_samples: int = 0
+    flagged: int = 0
+    warnings: dict = field(default_factory=dict)
 
 
 class Progress:
@@ -192,16 +204,27 @@ def generate(sweep: Sweep, out: str | Path, *, workers: int = 1, dask_address: s
         results = (compute_shard(sweep, k) for k in todo)
     else:
         results = _run_pool(sweep, todo, workers)
-    computed, cpu = 0, 0.0
-    for res in results:
-        dataset.write_shard(out, res.shard, res.signals, res.rows, res.masks)
-        computed += 1
-        cpu += res.cpu_seconds
-        bar.update(len(res.rows))
-    bar.close()
+    computed, cpu, n_rows, flagged, warnings = 0, 0.0, 0, 0, {}
+    try:
+        for res in results:
+            dataset.write_shard(out, res.shard, res.signals, res.rows, res.masks)
+            computed += 1
+            cpu += res.cpu_seconds
+            n_rows += len(res.rows)
+            for row in res.rows:
+                codes = [c for c in row[WARNINGS_COLUMN].split(",") if c]
+                flagged += bool(codes)
+                for c in codes:
+                    warnings[c] = warnings.get(c, 0) + 1
+            bar.update(len(res.rows))
+    finally:  # stopped while writing a shard: stop the workers now, not when the traceback is freed
+        if hasattr(results, "close"):
+            results.close()
+        bar.close()
     if len(dataset.finished_shards(out)) == sweep.n_shards:
         dataset.finalize(out)
-    return RunReport(Path(out), sweep.n_shards, computed, len(done), sweep.n_samples, time.monotonic() - t0, cpu)
+    return RunReport(Path(out), sweep.n_shards, computed, len(done), sweep.n_samples, time.monotonic() - t0, cpu,
+                     n_rows, flagged, dict(sorted(warnings.items())))
 
 
 def pool_context() -> multiprocessing.context.BaseContext:
@@ -225,8 +248,17 @@ def pool_context() -> multiprocessing.context.BaseContext:
 
 def _run_pool(sweep: Sweep, todo: list[int], workers: int):
     """Shards on a local process pool (:func:`pool_context`); at most ``2 * workers`` in flight (memory stays
-    bounded)."""
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=pool_context())
+    bounded).
+
+    The workers ignore Ctrl-C and die with this process (:func:`gearpit.interrupt.reset_in_worker`). Stopped
+    early (an error, Ctrl-C, SIGTERM under the command line, the caller closing this generator), it terminates
+    the workers and drops their shards: a worker left running would block for ever writing its result into a
+    pipe nobody reads (~230 MB each on ``sw2.toml``).
+    """
+    from gearpit.interrupt import reset_in_worker
+
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=pool_context(), initializer=reset_in_worker)
+    finished_all = False
     try:
         pending, queue = set(), list(todo)
         while queue or pending:
@@ -235,8 +267,25 @@ def _run_pool(sweep: Sweep, todo: list[int], workers: int):
             finished, pending = wait(pending, return_when=FIRST_COMPLETED)
             for f in sorted(finished, key=lambda f: f.result().shard):
                 yield f.result()
-    finally:  # on an error or Ctrl-C: drop the queued shards, do not wait for them
+        finished_all = True
+    finally:
+        if not finished_all:
+            _terminate_workers(pool)
         pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _terminate_workers(pool: ProcessPoolExecutor) -> None:
+    """SIGTERM every live worker of ``pool`` and reap it (the executor has no public call for this before
+    Python 3.14's ``terminate_workers``)."""
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    for p in procs:
+        if p.is_alive():
+            p.terminate()
+    for p in procs:
+        p.join(timeout=5.0)
+        if p.is_alive():
+            p.kill()
+            p.join()
 
 
 def _run_dask(sweep: Sweep, todo: list[int], address: str | None, local_workers: int | None):

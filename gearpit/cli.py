@@ -5,15 +5,23 @@ Each subcommand lives in its own module under ``gearpit.commands`` exposing
 parsed namespace, returning an exit code). Bad input anywhere raises a
 :class:`gearpit.errors.GearpitError`; this entry point turns it into one line on
 stderr and exit code 2, with no traceback.
+
+Stopped by Ctrl-C (SIGINT) or SIGTERM, a command unwinds (its temporaries
+removed, its workers stopped), prints one ``interrupted`` line on stderr and
+exits ``128 + signal`` (130, 143; :mod:`gearpit.interrupt`). Output piped into
+a reader that closes early (``| head``) ends the command quietly, as the Python
+documentation's "Note on SIGPIPE" in the ``signal`` module describes.
 """
 from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 
 from gearpit import __version__
 from gearpit.errors import GearpitError
+from gearpit.interrupt import exit_code, signals_raise
 
 #: subcommand modules, in the order of the pipeline
 COMMAND_MODULES = [
@@ -49,10 +57,23 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return int(args.func(args) or 0)
+        with signals_raise():
+            code = int(args.func(args) or 0)
+            sys.stdout.flush()  # inside the try: a closed pipe shows here, not at exit
+        return code
     except GearpitError as exc:
         print(f"gearpit {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:
+        # the reader (``| head``) has gone: send what is still buffered to devnull, so that the interpreter's
+        # own flush at exit does not fail again (Python docs, signal module, "Note on SIGPIPE")
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 1
+    except KeyboardInterrupt as exc:  # SIGINT or SIGTERM (gearpit.interrupt.Interrupted)
+        note = getattr(exc, "note", "")
+        print(f"gearpit {args.command}: interrupted{': ' + note if note else ''}", file=sys.stderr)
+        return exit_code(exc)
 
 
 if __name__ == "__main__":  # pragma: no cover

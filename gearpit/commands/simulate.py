@@ -1,11 +1,25 @@
-"""``gearpit simulate``: run one case file -> signals (CSV + NPZ with metadata), optional PNG."""
+"""``gearpit simulate``: run one case file -> signals (CSV + NPZ with metadata), optional PNG.
+
+The files of a run are written together (:func:`gearpit.atomic.atomic_set`):
+into a hidden folder first, renamed into place only once all are written, and
+an earlier ``STEM.png`` that this run does not redraw (no ``--png``) is removed
+with them, so ``--out`` never mixes two runs. Stopped (Ctrl-C, SIGTERM), the run
+leaves the folder as it was; the temporaries of a killed run (SIGKILL) are
+removed by the next run of the same case into the same folder.
+
+A record that is no physical gear pair's (a mesh that pulls without a
+contact-loss law, an unconverged solution, a load beyond the teeth's strength:
+:mod:`datagen.plausibility`) is still written, with one warning per finding on
+stderr and in the JSON's ``warnings``.
+"""
 from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
-from gearpit.atomic import atomic_path
+from gearpit.atomic import atomic_set, remove_leftovers
 
 
 def register(sub) -> None:
@@ -52,17 +66,22 @@ def run(args: argparse.Namespace) -> int:
         sig = _replace(sig, channels={c: sig.channels[c] for c in wanted})
     args.out.mkdir(parents=True, exist_ok=True)
     stem = args.case.stem
-    sig.save_csv(args.out / f"{stem}.csv")
-    sig.save_npz(args.out / f"{stem}.npz")
-    with atomic_path(args.out / f"{stem}.json") as tmp:
-        tmp.write_text(json.dumps(sig.metadata, indent=2))
-    if args.png:
-        from datagen.signals_plot import plot_signals
+    files = {ext: args.out / f"{stem}.{ext}" for ext in ("csv", "npz", "json", "png")}
+    remove_leftovers(files.values())
+    written = [files[e] for e in ("csv", "npz", "json")] + ([files["png"]] if args.png else [])
+    stale = [] if args.png else [files["png"]]
+    with atomic_set(written, stale=stale) as tmp:
+        sig.save_csv(tmp[files["csv"]])
+        sig.save_npz(tmp[files["npz"]])
+        tmp[files["json"]].write_text(json.dumps(sig.metadata, indent=2))
+        if args.png:
+            from datagen.signals_plot import plot_signals
 
-        with atomic_path(args.out / f"{stem}.png") as tmp:
-            plot_signals(sig, tmp, channel=args.channel, title=f"{stem}: {args.channel}")
+            plot_signals(sig, tmp[files["png"]], channel=args.channel, title=f"{stem}: {args.channel}")
     print(f"wrote {args.out / stem}.{{csv,npz,json{',png' if args.png else ''}}}: "
           f"{sig.n_samples} samples at {sig.fs_hz:g} Hz, {len(sig.channels)} channels")
+    for w in sig.metadata["warnings"]:       # also in the JSON and the NPZ metadata ("warnings")
+        print(f"gearpit simulate: warning: {w['message']} [{w['code']}]", file=sys.stderr)
     return 0
 
 
