@@ -320,18 +320,19 @@ def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "
                        secondary=secondary)
 
 
-def _time_from_channels(rec, names: tuple, time_column: str | None, where: str):
+def _time_from_channels(rec, names: tuple, time_column: str | None, where: str, fs_hz: float | None = None):
     """A file without names whose sidecar ``channels`` name its time column (``time_column``, or a name of
-    :mod:`compare.text_records`): the rate from it, and it is no channel. ``rec`` with ``names`` otherwise."""
+    :mod:`compare.text_records`): the rate from it (the sidecar's ``fs_hz`` where the column is not uniform), and
+    it is no channel. ``rec`` with ``names`` otherwise."""
     from dataclasses import replace
 
-    from compare.text_records import seconds_per_unit, times_to_fs
+    from compare.text_records import column_fs, seconds_per_unit
 
     col = time_column if time_column in names else next((n for n in names if seconds_per_unit(n) is not None), None)
     if rec.fs_hz is not None or col is None:
         return replace(rec, names=tuple(names))
     i = names.index(col)
-    fs = times_to_fs(rec.data[:, i] * (seconds_per_unit(col) or 1.0), f"{where}: column {col}")
+    fs = column_fs(rec.data[:, i], f"{where}: column {col}", unit_s=seconds_per_unit(col) or 1.0, fs_hz=fs_hz)
     return replace(rec, names=tuple(names[:i] + names[i + 1:]), data=np.delete(rec.data, i, axis=1), fs_hz=fs)
 
 
@@ -354,13 +355,13 @@ def load_measurement(path: str | Path, sidecar: Sidecar | str | Path | None = No
         sidecar = read_sidecar(sidecar)
     named_by_sidecar = sidecar.channels is not None and sidecar.time_column in sidecar.channels
     rec = read_record(p, sidecar.format, time_column=None if named_by_sidecar else sidecar.time_column,
-                      variable=sidecar.variable)
+                      variable=sidecar.variable, fs_hz=sidecar.fs_hz)
     names = rec.names
     if sidecar.channels is not None:
         require(len(sidecar.channels) == rec.data.shape[1], "channels", list(sidecar.channels),
                 f"{rec.data.shape[1]} names, one per data column of {p.name}")
         names = sidecar.channels
-        rec = _time_from_channels(rec, names, sidecar.time_column, p.name)
+        rec = _time_from_channels(rec, names, sidecar.time_column, p.name, sidecar.fs_hz)
         names = rec.names
     hints = dict(rec.hints)
     if rec.fs_hz is not None:
