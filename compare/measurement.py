@@ -261,8 +261,10 @@ def _channel(ref, names: tuple, where: str) -> str:
 
 
 def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "arrays",
-                            hints: dict | None = None) -> Measurement:
-    """Validate channels (name -> 1-D array) against a sidecar; the one place all checks live."""
+                            hints: dict | None = None, read_as: str = "acceleration") -> Measurement:
+    """Validate channels (name -> 1-D array) against a sidecar; the one place all checks live. ``read_as``: the
+    quantity the sensor channel is brought to (one of :data:`SENSOR_QUANTITIES`, differentiated from the sidecar's
+    ``sensor_quantity``; never integrated)."""
     hints = hints or {}
     names = tuple(channels)
     require(names, "channels", "none", "at least one channel")
@@ -300,13 +302,16 @@ def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "
                 "finite samples only")
     for key in (sensor,) + tuple(secondary):
         require(float(np.ptp(data[key])) > 0, f"channel {key}", "constant", "a varying signal")
-    order = SENSOR_QUANTITIES[sidecar.sensor_quantity]
-    if order:      # read as acceleration; every channel loses the samples the derivative cannot form
+    require(read_as in SENSOR_QUANTITIES, "read_as", read_as, "one of: " + ", ".join(SENSOR_QUANTITIES))
+    order = SENSOR_QUANTITIES[sidecar.sensor_quantity] - SENSOR_QUANTITIES[read_as]
+    require(order >= 0, "sensor_quantity", sidecar.sensor_quantity,
+            f"a quantity that can be differentiated to {read_as} (integration is not offered)")
+    if order:      # read as read_as; every channel loses the samples the derivative cannot form
         from features.derivative import HALF_TAPS, derivative
 
         cut = order * HALF_TAPS
         require(data[sensor].size > 2 * cut + 1, "measurement length", data[sensor].size,
-                f"> {2 * cut + 1} samples to read the {sidecar.sensor_quantity} as acceleration")
+                f"> {2 * cut + 1} samples to read the {sidecar.sensor_quantity} as {read_as}")
         data = {k: (derivative(v, float(fs), order) if k == sensor else v[cut:-cut]) for k, v in data.items()}
     pair = sidecar.pair
     slow_hz = pair.shaft_frequency_hz("wheel" if pair.wheel.teeth >= pair.pinion.teeth else "pinion", float(speed))
@@ -336,8 +341,10 @@ def _time_from_channels(rec, names: tuple, time_column: str | None, where: str, 
     return replace(rec, names=tuple(names[:i] + names[i + 1:]), data=np.delete(rec.data, i, axis=1), fs_hz=fs)
 
 
-def load_measurement(path: str | Path, sidecar: Sidecar | str | Path | None = None) -> Measurement:
-    """Load and validate a measurement file with its sidecar (found beside it when not given)."""
+def load_measurement(path: str | Path, sidecar: Sidecar | str | Path | None = None, *,
+                     read_as: str = "acceleration") -> Measurement:
+    """Load and validate a measurement file with its sidecar (found beside it when not given); ``read_as``: see
+    :func:`measurement_from_arrays`."""
     p = Path(path)
     require(p.is_file(), "measurement", str(p), "an existing file")
     if not isinstance(sidecar, Sidecar):
@@ -370,4 +377,4 @@ def load_measurement(path: str | Path, sidecar: Sidecar | str | Path | None = No
                     f"the file's own sampling rate {rec.fs_hz:.6g} Hz (or leave fs_hz out)")
         hints["fs_hz"] = rec.fs_hz
     channels = {name: rec.data[:, i] for i, name in enumerate(names)}
-    return measurement_from_arrays(channels, sidecar, source=str(p), hints=hints)
+    return measurement_from_arrays(channels, sidecar, source=str(p), hints=hints, read_as=read_as)

@@ -171,6 +171,18 @@ def column_fs(t: np.ndarray, where: str, *, unit_s: float = 1.0, fs_hz: float | 
         return None
 
 
+def parse_number(cell: str) -> float | None:
+    """A text cell as a number, a decimal comma read as a point (``"0,125"``, as in the rows above); None when it
+    is none (``"abc"``, ``""``)."""
+    c = cell.strip()
+    if _DECIMAL_COMMA.match(c):
+        c = c.replace(",", ".")
+    try:
+        return float(c)
+    except ValueError:
+        return None
+
+
 def _is_number(s: str) -> bool:
     try:
         float(s)
@@ -219,4 +231,4 @@ def _parse_rows(lines: list[str], delim: str | None, where: str, first_line_no: 
     return np.asarray(rows, dtype=float)
 
 
-__all__ = ["TIME_COLUMNS", "column_fs", "read_table", "seconds_per_unit", "times_to_fs", "written_resolution"]
+__all__ = ["TIME_COLUMNS", "column_fs", "parse_number", "read_table", "seconds_per_unit", "times_to_fs", "written_resolution"]

@@ -10,7 +10,11 @@ from __future__ import annotations
 
 import json
 import os
+import sys
+from dataclasses import replace
 from pathlib import Path
+
+import numpy as np
 
 from gearpit.errors import require
 
@@ -35,9 +39,15 @@ def register(sub) -> None:
 
 
 def predict_any(model, data, *, crops: int, allow_mismatch: bool, threads: int = 1):
-    """Predictions of a CNN (``threads`` worker threads) or a feature baseline."""
+    """Predictions of a CNN (``threads`` worker threads) or a feature baseline; ``data`` a signal set or the groups
+    of measurement files (:class:`models.record_groups.RecordGroups`), each group checked, then predicted."""
     from models.classifier import CNNClassifier
+    from models.record_groups import RecordGroups
 
+    if isinstance(data, RecordGroups):
+        return data.predict(lambda d: predict_any(model, d, crops=crops, allow_mismatch=allow_mismatch,
+                                                  threads=threads), model.spec, allow_mismatch=allow_mismatch,
+                            novelty=model.novelty if isinstance(model, CNNClassifier) else model.novelty_model())
     if isinstance(model, CNNClassifier):
         return model.predict(data, n_crops=crops, allow_mismatch=allow_mismatch, threads=threads)
     return model.predict(data, allow_mismatch=allow_mismatch)
@@ -53,6 +63,12 @@ def resolve_channel(model, paths: list[Path], channel: str | None) -> str | None
     return model.spec.channel if model.spec.channel in stored else None
 
 
+def measurement_notes(data) -> None:
+    """The files a folder run skipped, one line each on stderr."""
+    for line in getattr(data, "skipped", ()):
+        print(f"warning: {line}", file=sys.stderr)
+
+
 def run(args) -> int:
     from models.evaluate import evaluate, report_markdown, write_report
     from models.io import load_model
@@ -62,10 +78,25 @@ def run(args) -> int:
     require(args.crops >= 1, "--crops", args.crops, "an integer >= 1")
     model = load_model(args.model)
     data = load_data(args.data, channel=resolve_channel(model, args.data, args.channel), pair=args.pair,
-                     refine_speed=not args.sidecar_speed)
-    require(data.has_labels(), "DATA", data.source, "labelled records (a severity_class label at least)")
+                     refine_speed=not args.sidecar_speed, spec=model.spec, allow_mismatch=args.allow_mismatch,
+                     classes=model.spec.severity_classes)
+    measurement_notes(data)
+    labelled = data.merged() if hasattr(data, "merged") else data
+    require(labelled.has_labels(), "DATA", labelled.source, "labelled records (a severity_class label at least)")
+    scored = np.flatnonzero(labelled.labels["severity_class"].notna().to_numpy())
+    require(scored.size >= 1, "DATA", labelled.source, "at least one labelled record (not 'unknown')")
     pred = predict_any(model, data, crops=args.crops, allow_mismatch=args.allow_mismatch, threads=args.threads)
+    unscored = [str(v) for v in labelled.labels["file"].to_numpy()[np.setdiff1d(np.arange(len(labelled)), scored)]] \
+        if scored.size < len(labelled) else []
+    data, pred = (labelled.subset(scored), pred.subset(scored)) if unscored else (labelled, pred)
+    if unscored:
+        data = replace(data, source=", ".join(str(v) for v in data.labels["file"][:3])
+                       + (f" (+{len(data) - 3})" if len(data) > 3 else ""))
+    if unscored:
+        print(f"warning: {len(unscored)} file(s) predicted but not scored (label 'unknown'): {', '.join(unscored)}",
+              file=sys.stderr)
     metrics = evaluate(data, pred)
+    metrics["n_unscored"] = len(unscored)
     metrics["model"] = str(args.model)
     out = args.out if args.out is not None else args.model / "eval"
     write_report(metrics, pred, data, out, title=f"Evaluation of {args.model.name} on {data.source}")
