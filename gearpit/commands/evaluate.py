@@ -83,20 +83,19 @@ def run(args) -> int:
     measurement_notes(data)
     labelled = data.merged() if hasattr(data, "merged") else data
     require(labelled.has_labels(), "DATA", labelled.source, "labelled records (a severity_class label at least)")
-    scored = np.flatnonzero(labelled.labels["severity_class"].notna().to_numpy())
-    require(scored.size >= 1, "DATA", labelled.source, "at least one labelled record (not 'unknown')")
+    unscored = labelled.labels["severity_class"].isna().to_numpy()     # label 'unknown': predicted, not scored
+    require(not unscored.all(), "DATA", labelled.source, "at least one labelled record (not 'unknown')")
     pred = predict_any(model, data, crops=args.crops, allow_mismatch=args.allow_mismatch, threads=args.threads)
-    unscored = [str(v) for v in labelled.labels["file"].to_numpy()[np.setdiff1d(np.arange(len(labelled)), scored)]] \
-        if scored.size < len(labelled) else []
-    data, pred = (labelled.subset(scored), pred.subset(scored)) if unscored else (labelled, pred)
-    if unscored:
+    data = labelled
+    if unscored.any():
+        print(f"warning: {int(unscored.sum())} file(s) predicted but not scored (label 'unknown'): "
+              + ", ".join(str(v) for v in labelled.labels["file"][unscored]), file=sys.stderr)
+        keep = np.flatnonzero(~unscored)
+        data, pred = labelled.subset(keep), pred.subset(keep)
         data = replace(data, source=", ".join(str(v) for v in data.labels["file"][:3])
                        + (f" (+{len(data) - 3})" if len(data) > 3 else ""))
-    if unscored:
-        print(f"warning: {len(unscored)} file(s) predicted but not scored (label 'unknown'): {', '.join(unscored)}",
-              file=sys.stderr)
     metrics = evaluate(data, pred)
-    metrics["n_unscored"] = len(unscored)
+    metrics["n_unscored"] = int(unscored.sum())
     metrics["model"] = str(args.model)
     out = args.out if args.out is not None else args.model / "eval"
     write_report(metrics, pred, data, out, title=f"Evaluation of {args.model.name} on {data.source}")
