@@ -43,7 +43,7 @@ from pathlib import Path
 
 import numpy as np
 
-from compare.text_records import read_table, seconds_per_unit, times_to_fs
+from compare.text_records import column_fs, read_table, seconds_per_unit
 from gearpit.errors import InputError, require
 
 #: accepted values of the sidecar's ``format``
@@ -105,26 +105,27 @@ def detect_format(path: Path) -> str:
 
 
 def read_record(path: str | Path, fmt: str = "auto", *, time_column: str | None = None,
-                variable: str | None = None) -> RawRecord:
-    """Read ``path`` in layout ``fmt`` (one of :data:`FORMATS`)."""
+                variable: str | None = None, fs_hz: float | None = None) -> RawRecord:
+    """Read ``path`` in layout ``fmt`` (one of :data:`FORMATS`); ``fs_hz``: the sidecar's rate, if it gives one
+    (a time column that is not uniform is then dropped instead of refused, :func:`compare.text_records.column_fs`)."""
     p = Path(path)
     require(fmt in FORMATS, "format", fmt, "one of: " + ", ".join(FORMATS))
     require(p.is_file(), "measurement", str(p), "an existing file")
     if fmt == "auto":
         fmt = detect_format(p)
     if fmt == "csv":
-        return read_delimited(p, time_column=time_column)
+        return read_delimited(p, time_column=time_column, fs_hz=fs_hz)
     if fmt == "npy":
         return _from_array(np.load(p, allow_pickle=False), None, str(p))
     if fmt == "npz":
         with np.load(p, allow_pickle=False) as z:
-            return _from_mapping({k: z[k] for k in z.files}, variable, str(p))
+            return _from_mapping({k: z[k] for k in z.files}, variable, str(p), fs_hz=fs_hz)
     if fmt == "wav":
         return read_wav(p)
     if fmt == "mat":
-        return read_mat(p, variable)
+        return read_mat(p, variable, fs_hz=fs_hz)
     if fmt == "mcc5_thu":
-        rec = read_delimited(p, time_column=time_column)
+        rec = read_delimited(p, time_column=time_column, fs_hz=fs_hz)
         return RawRecord(rec.names, rec.data, rec.fs_hz,
                          {"fs_hz": 12800.0, "tacho": "speed", "sensor": "gearbox_vibration_x",
                           **_mcc5_name_hints(p.name)})
@@ -134,9 +135,10 @@ def read_record(path: str | Path, fmt: str = "auto", *, time_column: str | None 
 
 
 # ---------------------------------------------------------------------- text
-def read_delimited(path: Path, *, time_column: str | None = None, skip_text_lines: bool = False) -> RawRecord:
+def read_delimited(path: Path, *, time_column: str | None = None, skip_text_lines: bool = False,
+                   fs_hz: float | None = None) -> RawRecord:
     """Generic CSV/TXT (:mod:`compare.text_records`); ``skip_text_lines`` drops leading non-numeric lines."""
-    return RawRecord(*read_table(path, time_column=time_column, skip_text_lines=skip_text_lines))
+    return RawRecord(*read_table(path, time_column=time_column, skip_text_lines=skip_text_lines, fs_hz=fs_hz))
 
 
 def _mcc5_name_hints(name: str) -> dict:
@@ -217,7 +219,7 @@ def _flatten(mapping: dict, prefix: str = "") -> dict:
     return out
 
 
-def _from_mapping(mapping: dict, variable: str | None, where: str) -> RawRecord:
+def _from_mapping(mapping: dict, variable: str | None, where: str, fs_hz: float | None = None) -> RawRecord:
     """Numeric variables of an NPZ/MAT file; nested structs flattened (a variable keeps its own name when no other
     leaf has it, else its dotted path); a scalar ``fs`` or a uniform ``time``/``t`` vector gives the rate."""
     flat = _flatten(mapping)
@@ -229,11 +231,12 @@ def _from_mapping(mapping: dict, variable: str | None, where: str) -> RawRecord:
              and np.squeeze(v).ndim == 1 and k != variable]
     if len(times) == 1:
         t = arrays.pop(times[0])
-        fs_t = times_to_fs(np.squeeze(t) * seconds_per_unit(times[0].rsplit(".", 1)[-1]), f"{where}:{times[0]}")
-        if fs is not None:
+        fs_t = column_fs(np.squeeze(t), f"{where}:{times[0]}", unit_s=seconds_per_unit(times[0].rsplit(".", 1)[-1]),
+                         fs_hz=fs_hz)
+        if fs is not None and fs_t is not None:
             require(abs(fs_t - fs) <= 0.01 * fs, f"{where}:{times[0]}", f"a rate of {fs_t:.6g} Hz",
                     f"the file's fs ({fs:.6g} Hz) within 1 %")
-        fs = fs if fs is not None else fs_t
+        fs = fs if fs is not None or fs_t is None else fs_t
     if variable is not None:
         require(variable in arrays, "variable", variable, "one of: " + ", ".join(sorted(arrays)))
         rec = _from_array(arrays[variable], None, f"{where}:{variable}")
@@ -267,7 +270,7 @@ def read_wav(path: Path) -> RawRecord:
     return RawRecord(rec.names, rec.data, float(fs))
 
 
-def read_mat(path: Path, variable: str | None = None) -> RawRecord:
+def read_mat(path: Path, variable: str | None = None, *, fs_hz: float | None = None) -> RawRecord:
     """MATLAB file: v4-v7.2 through scipy, v7.3 (HDF5) through h5py."""
     import scipy.io
 
@@ -275,7 +278,7 @@ def read_mat(path: Path, variable: str | None = None) -> RawRecord:
         mapping = scipy.io.loadmat(path, simplify_cells=True)
     except (NotImplementedError, ValueError) as exc:  # v7.3 is HDF5 (NotImplementedError from scipy)
         mapping = _read_hdf5_mat(path, exc)
-    return _from_mapping(mapping, variable, str(path))
+    return _from_mapping(mapping, variable, str(path), fs_hz=fs_hz)
 
 
 def _read_hdf5_mat(path: Path, exc: Exception) -> dict:

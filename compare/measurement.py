@@ -261,8 +261,10 @@ def _channel(ref, names: tuple, where: str) -> str:
 
 
 def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "arrays",
-                            hints: dict | None = None) -> Measurement:
-    """Validate channels (name -> 1-D array) against a sidecar; the one place all checks live."""
+                            hints: dict | None = None, read_as: str = "acceleration") -> Measurement:
+    """Validate channels (name -> 1-D array) against a sidecar; the one place all checks live. ``read_as``: the
+    quantity the sensor channel is brought to (one of :data:`SENSOR_QUANTITIES`, differentiated from the sidecar's
+    ``sensor_quantity``; never integrated)."""
     hints = hints or {}
     names = tuple(channels)
     require(names, "channels", "none", "at least one channel")
@@ -300,13 +302,16 @@ def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "
                 "finite samples only")
     for key in (sensor,) + tuple(secondary):
         require(float(np.ptp(data[key])) > 0, f"channel {key}", "constant", "a varying signal")
-    order = SENSOR_QUANTITIES[sidecar.sensor_quantity]
-    if order:      # read as acceleration; every channel loses the samples the derivative cannot form
+    require(read_as in SENSOR_QUANTITIES, "read_as", read_as, "one of: " + ", ".join(SENSOR_QUANTITIES))
+    order = SENSOR_QUANTITIES[sidecar.sensor_quantity] - SENSOR_QUANTITIES[read_as]
+    require(order >= 0, "sensor_quantity", sidecar.sensor_quantity,
+            f"a quantity that can be differentiated to {read_as} (integration is not offered)")
+    if order:      # read as read_as; every channel loses the samples the derivative cannot form
         from features.derivative import HALF_TAPS, derivative
 
         cut = order * HALF_TAPS
         require(data[sensor].size > 2 * cut + 1, "measurement length", data[sensor].size,
-                f"> {2 * cut + 1} samples to read the {sidecar.sensor_quantity} as acceleration")
+                f"> {2 * cut + 1} samples to read the {sidecar.sensor_quantity} as {read_as}")
         data = {k: (derivative(v, float(fs), order) if k == sensor else v[cut:-cut]) for k, v in data.items()}
     pair = sidecar.pair
     slow_hz = pair.shaft_frequency_hz("wheel" if pair.wheel.teeth >= pair.pinion.teeth else "pinion", float(speed))
@@ -320,23 +325,26 @@ def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "
                        secondary=secondary)
 
 
-def _time_from_channels(rec, names: tuple, time_column: str | None, where: str):
+def _time_from_channels(rec, names: tuple, time_column: str | None, where: str, fs_hz: float | None = None):
     """A file without names whose sidecar ``channels`` name its time column (``time_column``, or a name of
-    :mod:`compare.text_records`): the rate from it, and it is no channel. ``rec`` with ``names`` otherwise."""
+    :mod:`compare.text_records`): the rate from it (the sidecar's ``fs_hz`` where the column is not uniform), and
+    it is no channel. ``rec`` with ``names`` otherwise."""
     from dataclasses import replace
 
-    from compare.text_records import seconds_per_unit, times_to_fs
+    from compare.text_records import column_fs, seconds_per_unit
 
     col = time_column if time_column in names else next((n for n in names if seconds_per_unit(n) is not None), None)
     if rec.fs_hz is not None or col is None:
         return replace(rec, names=tuple(names))
     i = names.index(col)
-    fs = times_to_fs(rec.data[:, i] * (seconds_per_unit(col) or 1.0), f"{where}: column {col}")
+    fs = column_fs(rec.data[:, i], f"{where}: column {col}", unit_s=seconds_per_unit(col) or 1.0, fs_hz=fs_hz)
     return replace(rec, names=tuple(names[:i] + names[i + 1:]), data=np.delete(rec.data, i, axis=1), fs_hz=fs)
 
 
-def load_measurement(path: str | Path, sidecar: Sidecar | str | Path | None = None) -> Measurement:
-    """Load and validate a measurement file with its sidecar (found beside it when not given)."""
+def load_measurement(path: str | Path, sidecar: Sidecar | str | Path | None = None, *,
+                     read_as: str = "acceleration") -> Measurement:
+    """Load and validate a measurement file with its sidecar (found beside it when not given); ``read_as``: see
+    :func:`measurement_from_arrays`."""
     p = Path(path)
     require(p.is_file(), "measurement", str(p), "an existing file")
     if not isinstance(sidecar, Sidecar):
@@ -354,13 +362,13 @@ def load_measurement(path: str | Path, sidecar: Sidecar | str | Path | None = No
         sidecar = read_sidecar(sidecar)
     named_by_sidecar = sidecar.channels is not None and sidecar.time_column in sidecar.channels
     rec = read_record(p, sidecar.format, time_column=None if named_by_sidecar else sidecar.time_column,
-                      variable=sidecar.variable)
+                      variable=sidecar.variable, fs_hz=sidecar.fs_hz)
     names = rec.names
     if sidecar.channels is not None:
         require(len(sidecar.channels) == rec.data.shape[1], "channels", list(sidecar.channels),
                 f"{rec.data.shape[1]} names, one per data column of {p.name}")
         names = sidecar.channels
-        rec = _time_from_channels(rec, names, sidecar.time_column, p.name)
+        rec = _time_from_channels(rec, names, sidecar.time_column, p.name, sidecar.fs_hz)
         names = rec.names
     hints = dict(rec.hints)
     if rec.fs_hz is not None:
@@ -369,4 +377,4 @@ def load_measurement(path: str | Path, sidecar: Sidecar | str | Path | None = No
                     f"the file's own sampling rate {rec.fs_hz:.6g} Hz (or leave fs_hz out)")
         hints["fs_hz"] = rec.fs_hz
     channels = {name: rec.data[:, i] for i, name in enumerate(names)}
-    return measurement_from_arrays(channels, sidecar, source=str(p), hints=hints)
+    return measurement_from_arrays(channels, sidecar, source=str(p), hints=hints, read_as=read_as)

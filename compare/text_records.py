@@ -10,8 +10,10 @@ What a logger or a spreadsheet export puts around the numbers, and how it is rea
 - a decimal comma (German or French locale exports: ``0,125;-3,5``): read as a decimal point when the
   delimiter is not the comma itself;
 - a time column: named ``time``, ``time_s``, ``t`` (or the sidecar's ``time_column``), with its unit in the
-  name where it is not seconds (``time_ms``, ``Time [ms]``, ``t (us)``): fs = 1 / median step, converted to
-  seconds here, refused unless every step is within 1 % of the median.
+  name where it is not seconds (``time_ms``, ``Time [ms]``, ``t (us)``), converted to seconds here: fs = 1 / the
+  least-squares step over all samples (:func:`times_to_fs`), refused unless every step lies within the column's
+  written resolution of it (a gap, a repeated or jittering time) - unless the sidecar gives ``fs_hz``, which is
+  then the rate and the column is only dropped.
 
 Anything else that is not a number (a unit row under the header, a text cell among the data) is refused with
 the line and what was found, never guessed at.
@@ -45,23 +47,64 @@ def seconds_per_unit(name: str) -> float | None:
     return _SECONDS[m.group(1).lower()] if m else None
 
 
-def times_to_fs(t: np.ndarray, where: str) -> float:
-    """The sampling rate of the sample times ``t`` in seconds; refused unless finite, increasing and uniform to
-    1 % of the median step."""
+def written_resolution(t: np.ndarray) -> float:
+    """The step of the last digit the values ``t`` are written to: ``10**-d`` for the fewest decimals ``d`` (at
+    most 12) that write every value exactly (``0.0000781`` -> 1e-07), else 0 (full binary precision)."""
     t = np.asarray(t, dtype=float).ravel()
+    top = float(np.max(np.abs(t))) if t.size else 0.0
+    for d in range(13):
+        q = t * 10.0 ** d
+        if float(np.max(np.abs(q - np.round(q)))) <= 1e-6 + 8 * np.finfo(float).eps * top * 10.0 ** d:
+            return 10.0 ** -d
+    return 0.0
+
+
+def times_to_fs(t: np.ndarray, where: str, *, unit_s: float = 1.0) -> float:
+    """The sampling rate (Hz) of the sample times ``t`` (in units of ``unit_s`` seconds).
+
+    The rate is ``1 / T`` with ``T`` the least-squares step over all samples (not the median step: a column
+    written to 7 decimals at 12.8 kHz has steps of 78 and 79 us, median 78). Refused unless finite, increasing and
+    uniform to the column's written resolution: every step within the resolution of the last printed digit
+    (:func:`written_resolution`; two roundings of half a digit each) plus the float rounding of ``t``, of
+    ``T``; a gap or a jitter beyond it is refused, with the advice to give ``fs_hz`` in the sidecar. A column
+    written to ``d`` decimals gives the rate to ``fs res / duration`` at worst; it is rounded to the power of ten
+    below that (``12799.99964`` from a 0.5 s column written to 10 us -> 12800.0), so that the digits beyond what
+    the column holds do not count as a different rate.
+
+    Examples
+    --------
+    >>> round(times_to_fs(np.round(np.arange(6400) / 12800.0, 7), "time_s"), 6)
+    12800.0
+    """
+    raw = np.asarray(t)
+    eps = float(np.finfo(raw.dtype).eps) if raw.dtype.kind == "f" else float(np.finfo(float).eps)
+    t = raw.astype(float).ravel()
     require(t.size >= 3 and bool(np.all(np.isfinite(t))), where, "non-finite or fewer than 3 times",
             "finite times")
+    k = np.arange(t.size, dtype=float) - 0.5 * (t.size - 1)
+    step = float(np.dot(k, t - t.mean()) / np.dot(k, k))          # least squares: t = t0 + step k
+    tol = written_resolution(t) + 8 * eps * float(np.max(np.abs(t)))
     dt = np.diff(t)
-    med = float(np.median(dt))
-    require(med > 0 and float(np.max(np.abs(dt - med))) <= 0.01 * med, where,
-            "non-uniform or decreasing times", "uniform sampling (every step within 1 % of the median)")
-    return 1.0 / med
+    worst = int(np.argmax(np.abs(dt - step)))
+    if not (step > 0 and float(np.min(dt)) > 0 and abs(dt[worst] - step) <= tol + 1e-9 * step):
+        bad = int(np.argmin(dt)) if step <= 0 or float(np.min(dt)) <= 0 else worst
+        raise InputError(where, f"non-uniform or decreasing times (step {bad} -> {bad + 1}: {dt[bad]:.9g} against "
+                         f"the mean step {step:.9g})",
+                         f"uniform sampling: every step within the column's written resolution ({tol:.3g}) of the "
+                         "mean step; for a logger whose clock is not uniform give fs_hz in the sidecar")
+    fs = 1.0 / (step * unit_s)
+    res = written_resolution(t)
+    if res > 0:   # known to fs res / duration at worst: rounded to the power of ten below that, not to noise
+        grid = 10.0 ** np.floor(np.log10(fs * res / (t[-1] - t[0])))
+        fs = float(np.round(fs / grid) * grid)
+    return fs
 
 
-def read_table(path: Path, *, time_column: str | None = None,
-               skip_text_lines: bool = False) -> tuple[tuple, np.ndarray, float | None]:
+def read_table(path: Path, *, time_column: str | None = None, skip_text_lines: bool = False,
+               fs_hz: float | None = None) -> tuple[tuple, np.ndarray, float | None]:
     """``(names, data, fs_hz)`` of a delimited text file (module docstring); ``skip_text_lines`` drops every
-    leading line that is not a row of at least two numbers (layouts with free-text preambles)."""
+    leading line that is not a row of at least two numbers (layouts with free-text preambles); ``fs_hz``: the
+    sidecar's rate, which a time column that is not uniform leaves in place of refusing the file."""
     lines = path.read_text(encoding="utf-8-sig", errors="replace").splitlines()
     lines = ["" if ln.lstrip().startswith(_COMMENT) else ln for ln in lines]     # keeps the line numbers
     start = 0
@@ -111,10 +154,33 @@ def read_table(path: Path, *, time_column: str | None = None,
         scale = seconds_per_unit(names[tcol]) if tcol is not None else None
     fs = None
     if tcol is not None:
-        fs = times_to_fs(data[:, tcol] * scale, f"{path}: column {names[tcol]}")
+        fs = column_fs(data[:, tcol], f"{path}: column {names[tcol]}", unit_s=scale, fs_hz=fs_hz)
         data = np.delete(data, tcol, axis=1)
         names = names[:tcol] + names[tcol + 1:]
     return names, data, fs
+
+
+def column_fs(t: np.ndarray, where: str, *, unit_s: float = 1.0, fs_hz: float | None = None) -> float | None:
+    """:func:`times_to_fs` of a time column; where it is refused and the sidecar gives ``fs_hz``, None (the
+    sidecar's rate is used)."""
+    try:
+        return times_to_fs(t, where, unit_s=unit_s)
+    except InputError:
+        if fs_hz is None:
+            raise
+        return None
+
+
+def parse_number(cell: str) -> float | None:
+    """A text cell as a number, a decimal comma read as a point (``"0,125"``, as in the rows above); None when it
+    is none (``"abc"``, ``""``)."""
+    c = cell.strip()
+    if _DECIMAL_COMMA.match(c):
+        c = c.replace(",", ".")
+    try:
+        return float(c)
+    except ValueError:
+        return None
 
 
 def _is_number(s: str) -> bool:
@@ -165,4 +231,4 @@ def _parse_rows(lines: list[str], delim: str | None, where: str, first_line_no: 
     return np.asarray(rows, dtype=float)
 
 
-__all__ = ["TIME_COLUMNS", "read_table", "seconds_per_unit", "times_to_fs"]
+__all__ = ["TIME_COLUMNS", "column_fs", "parse_number", "read_table", "seconds_per_unit", "times_to_fs", "written_resolution"]

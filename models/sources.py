@@ -3,13 +3,10 @@
 - :func:`load_dataset`: a dataset directory of :mod:`datagen.dataset` (one
   channel, one gear pair, optionally a subset of rows; the channel's healthy twins
   as references where the dataset stores them, ``[sweep] healthy_reference``);
-- :func:`load_measurements`: measurement files with sidecars
-  (:func:`compare.measurement.load_measurement`). Labels, when present, come from
-  a ``labels.csv`` beside the files (columns ``file``, ``severity_class`` and any of
-  ``severity``, ``n_pitted_teeth``, ``teeth_class``), else from the sidecar's
-  ``fault`` (``"healthy"`` -> severity 0, no pitted teeth; any other value -> that
-  class name, counts unknown). A sidecar's ``reference`` (a healthy recording of the same machine) is loaded
-  the same way and resampled to its record's measured speed. Records are cut to the shortest one;
+- measurement files with sidecars (:mod:`models.measurement_files`: which files of a folder, their labels from
+  ``labels.csv`` or the sidecars' ``fault`` (:mod:`models.labels_file`), the sensor's quantity brought to the
+  model's, each record cut to the model's trained length, a sidecar's ``reference`` loaded as that record's healthy
+  reference and resampled to its measured speed);
 - :func:`load_data`: either of the two, by looking at the path.
 
 The speed of a measurement (:func:`measured_speed`): the TSA and order representations average the record
@@ -39,16 +36,17 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-import pandas as pd
 
 from gearpit.errors import InputError, require
 from models.data import PairInfo, SignalSet, teeth_class_of
 from models.order_tracking import (TRACK_MIN_RAD, mesh_angle, phase_deviation_rad, resample_to_constant_speed,
                                    tacho_angle)
 
-LABELS_FILE = "labels.csv"
-MEASUREMENT_SUFFIXES = (".csv", ".txt", ".npy", ".npz", ".wav", ".mat")
+if TYPE_CHECKING:
+    from models.record_groups import RecordGroups
 
 
 def load_dataset(path: str | Path, *, channel: str | None = None, pair: str | None = None,
@@ -100,39 +98,6 @@ def load_dataset(path: str | Path, *, channel: str | None = None, pair: str | No
     return SignalSet(x, float(meta["fs_hz"]), PairInfo(pair, int(pairs[pair]["z_pinion"]), int(pairs[pair]["z_wheel"])),
                      labels, source=f"{root} [{ch}]", channel=ch, reference=reference)
 
-
-def _labels_table(folder: Path) -> pd.DataFrame | None:
-    f = folder / LABELS_FILE
-    if not f.is_file():
-        return None
-    table = pd.read_csv(f)
-    require("file" in table.columns and "severity_class" in table.columns, LABELS_FILE, list(table.columns),
-            "columns file, severity_class (and optionally severity, n_pitted_teeth, teeth_class)")
-    allowed = {"file", "severity_class", "severity", "n_pitted_teeth", "teeth_class"}
-    extra = sorted(set(table.columns) - allowed)
-    require(not extra, f"{LABELS_FILE}.{extra[0] if extra else ''}", extra, "one of: " + ", ".join(sorted(allowed)))
-    return table.set_index("file")
-
-
-def measurement_files(folder: str | Path) -> list[Path]:
-    """Measurement files in ``folder``: data files with a sidecar beside them."""
-    from compare.measurement import find_sidecar
-
-    root = Path(folder)
-    out = []
-    for p in sorted(root.iterdir()):
-        if p.suffix.lower() not in MEASUREMENT_SUFFIXES or p.name == LABELS_FILE:
-            continue
-        try:
-            find_sidecar(p)
-        except InputError:
-            continue
-        out.append(p)
-    return out
-
-
-#: largest speed difference between a record and its healthy reference (fraction)
-MAX_REFERENCE_SPEED_OFFSET = 0.05
 
 #: the wider search that confirms the spectrum's speed, in units of the search half-width ``1 / (2 z1)``
 CONFIRM_WIDTH = 3.0
@@ -229,111 +194,38 @@ def without_drift(x: np.ndarray, measurement, speed_rpm: float) -> tuple[np.ndar
                   "before the classifier (a sensor's drift, an offset, a foundation's sway)")
 
 
-def load_measurements(paths: list[str | Path], *, refine_speed: bool = True) -> SignalSet:
-    """Records of measurement files (with sidecars) as one signal set (see module docstring); ``refine_speed``:
-    measure each record's speed (:func:`measured_speed`) instead of taking the sidecar's."""
-    from compare.measurement import load_measurement
-    from compare.quality import clipping, clipping_message
+def measurement_files(folder: str | Path) -> list[Path]:
+    """The measurement files of a folder (:func:`models.measurement_files.folder_files`)."""
+    from models.measurement_files import folder_files
 
-    files = [Path(p) for p in paths]
-    require(len(files) >= 1, "FILES", 0, "at least one measurement file")
-    ms = [load_measurement(f) for f in files]
-    fs = ms[0].fs_hz
-    for m, f in zip(ms, files):
-        require(np.isclose(m.fs_hz, fs, rtol=1e-9), f"{f.name}: fs_hz", m.fs_hz, f"{fs:g} Hz (all files alike)")
-    pair_of = [_pair_info(m.pair) for m in ms]
-    for p, f in zip(pair_of, files):
-        require((p.z_pinion, p.z_wheel) == (pair_of[0].z_pinion, pair_of[0].z_wheel), f"{f.name}: pair", p.name,
-                f"{pair_of[0].name} (all files alike)")
-    rows, records = [], []
-    for m, f in zip(ms, files):
-        speed, method, note = measured_speed(m) if refine_speed else (float(m.speed_rpm), "sidecar", "")
-        pair_note = pair_warning(m, speed, method) if method != "sidecar" else ""
-        clip_note = clipping_message(clipping(m.signal), m.sensor) or ""
-        x, speed, dev = tracked_record(m, speed, method) if refine_speed else (m.signal, speed, np.nan)
-        x, drift_note = without_drift(x, m, speed)
-        records.append(x)
-        rows.append({"file": f.name, "speed_rpm": speed, "torque_nm": float(m.torque_nm),
-                     "speed_rpm_sidecar": float(m.speed_rpm), "speed_method": method, "speed_note": note,
-                     "pair_note": pair_note, "clip_note": clip_note, "drift_note": drift_note, "mesh_phase_dev_rad": dev,
-                     "order_tracked": bool(dev > TRACK_MIN_RAD)})
-    refs = _references(ms, files, rows, refine_speed) if any(m.sidecar.reference for m in ms) else None
-    n = min(r.size for r in records + (refs or []))
-    x = np.stack([np.asarray(r[:n], dtype=np.float32) for r in records])
-    labels = pd.DataFrame(rows)
-    tables = {f.parent: _labels_table(f.parent) for f in files}
-    if all(t is not None for t in tables.values()):
-        for col in ("severity_class", "severity", "n_pitted_teeth", "teeth_class"):
-            vals = []
-            for f in files:
-                t = tables[f.parent]
-                require(f.name in t.index, LABELS_FILE, f.name, f"a row for every file ({t.index.size} rows)")
-                vals.append(t.loc[f.name, col] if col in t.columns else np.nan)
-            if not all(pd.isna(v) for v in vals):
-                labels[col] = vals
-        if "teeth_class" not in labels and "n_pitted_teeth" in labels:
-            labels["teeth_class"] = teeth_class_of(labels["n_pitted_teeth"])
-    elif all(m.fault is not None for m in ms):
-        faults = [str(m.fault) for m in ms]
-        labels["severity_class"] = faults
-        healthy = np.array([f == "healthy" for f in faults])
-        labels["severity"] = np.where(healthy, 0.0, np.nan)
-        if healthy.all():
-            labels["n_pitted_teeth"] = 0
-            labels["teeth_class"] = "0"
-    return SignalSet(x, float(fs), pair_of[0], labels, source=", ".join(f.name for f in files[:3])
-                     + (f" (+{len(files) - 3})" if len(files) > 3 else ""),
-                     reference=None if refs is None else np.stack([np.asarray(r[:n], np.float32) for r in refs]))
+    return folder_files(folder)[0]
 
 
-def _references(ms: list, files: list[Path], rows: list[dict], refine_speed: bool) -> list[np.ndarray]:
-    """The healthy reference of every record (sidecar key ``reference``): loaded like the record (speed measured,
-    tracked, drift removed), then resampled to the record's speed so that their shaft orders fall on the same bins."""
-    from scipy.signal import resample
+def load_measurements(paths: list[str | Path], *, refine_speed: bool = True, spec=None) -> SignalSet:
+    """Records of measurement files as one signal set (:func:`models.measurement_files.load_measurements`)."""
+    from models.measurement_files import load_measurements as load
 
-    from compare.measurement import load_measurement
-
-    out = []
-    for m, f, row in zip(ms, files, rows):
-        require(m.sidecar.reference is not None, f"{f.name}: reference", None,
-                "a reference in every sidecar or in none (records read against a reference need one each)")
-        p = f.parent / m.sidecar.reference
-        require(p.is_file(), f"{f.name}: reference", m.sidecar.reference,
-                f"an existing measurement file (relative to {f.parent})")
-        r = load_measurement(p)
-        require(np.isclose(r.fs_hz, m.fs_hz, rtol=1e-9), f"{p.name}: fs_hz", r.fs_hz,
-                f"{m.fs_hz:g} Hz (the record's)")
-        speed, method, _ = measured_speed(r) if refine_speed else (float(r.speed_rpm), "sidecar", "")
-        y, speed, _ = tracked_record(r, speed, method) if refine_speed else (r.signal, speed, np.nan)
-        y, _ = without_drift(y, r, speed)
-        factor = speed / row["speed_rpm"]           # > 1: the reference ran faster, stretch it
-        require(abs(factor - 1.0) <= MAX_REFERENCE_SPEED_OFFSET, f"{p.name}: speed_rpm", round(speed, 2),
-                f"within {100 * MAX_REFERENCE_SPEED_OFFSET:g} % of the record's {row['speed_rpm']:.2f} rpm "
-                "(a reference at the same operating point)")
-        out.append(resample(y, int(round(y.size * factor))) if abs(factor - 1.0) > 1e-6 else y)
-    return out
-
-
-def _pair_info(pair) -> PairInfo:
-    name = getattr(pair, "name", None) or str(pair)
-    try:
-        return PairInfo(str(name), int(pair.pinion.teeth), int(pair.wheel.teeth))
-    except AttributeError:
-        raise InputError("pair", pair, "a gear pair (preset name or pair table) in the sidecar") from None
+    return load(paths, refine_speed=refine_speed, spec=spec)
 
 
 def load_data(paths: list[str | Path], *, channel: str | None = None, pair: str | None = None,
-              refine_speed: bool = True) -> SignalSet:
-    """A generated dataset directory (one path with ``metadata.json``), a folder of
-    measurement files, or measurement files (``refine_speed``: see :func:`load_measurements`)."""
+              refine_speed: bool = True, spec=None, allow_mismatch: bool = False,
+              classes: list[str] | None = None) -> SignalSet | RecordGroups:
+    """A generated dataset directory (one path with ``metadata.json``): its signal set; a folder of measurement
+    files, or measurement files: their :class:`~models.record_groups.RecordGroups`, each file read on its own for
+    the model of ``spec`` (:func:`models.measurement_files.load_measurement_groups`: ``refine_speed``,
+    ``allow_mismatch``, ``classes``)."""
+    from models.measurement_files import folder_files, load_measurement_groups
+
     ps = [Path(p) for p in paths]
     require(len(ps) >= 1, "DATA", 0, "a dataset directory, a folder of measurements or measurement files")
+    kw = dict(refine_speed=refine_speed, spec=spec, allow_mismatch=allow_mismatch, classes=classes)
     if len(ps) == 1 and ps[0].is_dir():
         if (ps[0] / "metadata.json").is_file():
             return load_dataset(ps[0], channel=channel, pair=pair)
-        files = measurement_files(ps[0])
+        files, skipped = folder_files(ps[0])
         require(len(files) >= 1, "DATA", str(ps[0]), "a dataset directory or a folder of measurement files with sidecars")
-        return load_measurements(files, refine_speed=refine_speed)
+        return load_measurement_groups(files, skipped=tuple(skipped), **kw)
     for p in ps:
         require(p.is_file(), "DATA", str(p), "an existing file")
-    return load_measurements(ps, refine_speed=refine_speed)
+    return load_measurement_groups(ps, **kw)

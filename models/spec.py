@@ -6,11 +6,11 @@ feature configuration), the class names, the severity scale, the ranges of the
 operating conditions seen in training and the training configuration.
 
 :func:`check_input` compares a :class:`~models.data.SignalSet` with a spec before
-any prediction: a different sampling rate, gear pair or a record too short for
-one segment is an error (:class:`~gearpit.errors.InputError`); with
-``allow_mismatch`` a different sampling rate or pair becomes a warning where the
-representation can still be computed; speeds or loads outside the trained
-ranges are always warnings, per record.
+any prediction: a different sampling rate, gear pair or a record shorter than
+the trained record length is an error (:class:`~gearpit.errors.InputError`); with
+``allow_mismatch`` each becomes a warning where the representation can still be
+computed (a CNN needs one segment, a feature baseline half the trained length);
+speeds or loads outside the trained ranges are always warnings, per record.
 """
 from __future__ import annotations
 
@@ -148,10 +148,9 @@ def check_input(spec: ModelSpec, data: SignalSet, *, allow_mismatch: bool = Fals
     Raises
     ------
     InputError
-        Different tooth counts or sampling rate (unless ``allow_mismatch`` and the
-        representation can be computed anyway), no healthy reference for a model read against one, records too
-        short for one
-        segment, a speed missing where the representation needs it, a channel of another physical
+        Different tooth counts or sampling rate, records shorter than the trained ``spec.n_samples`` (unless
+        ``allow_mismatch`` and the representation can be computed anyway: one segment of the CNN, half the
+        trained length of a baseline), no healthy reference for a model read against one, a speed missing where the representation needs it, a channel of another physical
         quantity than the trained one (when both names carry a unit, :func:`channel_quantity`).
     """
     common: list[str] = []
@@ -168,6 +167,11 @@ def check_input(spec: ModelSpec, data: SignalSet, *, allow_mismatch: bool = Fals
         common.append(msg)
     elif p.name != q.name:
         common.append(f"gear pair named {q.name}, trained on {p.name} (same tooth counts)")
+    if data.n_samples < spec.n_samples:    # every model type alike: the trained length, or a warning
+        if not allow_mismatch:
+            raise InputError("n_samples", data.n_samples,
+                             f">= {spec.n_samples} samples (the model's trained record length), or allow_mismatch")
+        common.append(f"record of {data.n_samples} samples, shorter than the trained {spec.n_samples}")
     kind = spec.representation.get("kind") if spec.model_type == "cnn" else "features"
     uses_mesh_only = kind == "mesh_order" and "mesh_cps" in data.labels
     if not np.isclose(data.fs_hz, spec.fs_hz, rtol=1e-9) and not uses_mesh_only:
@@ -191,12 +195,12 @@ def check_input(spec: ModelSpec, data: SignalSet, *, allow_mismatch: bool = Fals
     else:
         need = int(np.ceil(spec.n_samples * 0.5))
         require(data.n_samples >= need, "n_samples", data.n_samples,
-                f">= {need} samples (half the training record length {spec.n_samples})")
+                f">= {need} samples (half the training record length {spec.n_samples}, with allow_mismatch)")
         require(data.shaft_hz() is not None, "speed_rpm", None, "the pinion speed of every record (features need it)")
     per_record = [list(common) for _ in range(len(data))]
-    # a measurement whose sidecar speed the spectrum did not confirm; whose sidecar pair it questions; clipped;
-    # whose drift was removed
-    for col in ("speed_note", "pair_note", "clip_note", "drift_note"):
+    # a measurement whose channel name suggests another quantity than its sidecar's; whose sidecar speed the
+    # spectrum did not confirm; whose sidecar pair it questions; clipped; whose drift was removed; cut to its reference
+    for col in ("quantity_note", "speed_note", "pair_note", "clip_note", "drift_note", "length_note"):
         if col in data.labels:
             for i, note in enumerate(data.labels[col].fillna("").astype(str)):
                 if note:
@@ -240,6 +244,13 @@ class Predictions:
     def confidence(self) -> np.ndarray:
         """Probability of the predicted severity class."""
         return self.severity_proba.max(axis=1)
+
+    def subset(self, idx) -> "Predictions":
+        """The predictions of the records at positions ``idx`` (the batch test stays that of all records)."""
+        idx = np.asarray(idx)
+        return Predictions(self.severity_classes, self.teeth_classes, self.severity_proba[idx],
+                           self.teeth_proba[idx], self.severity[idx], [self.warnings[i] for i in idx],
+                           None if self.novelty is None else self.novelty[idx], self.novelty_batch)
 
     def to_frame(self) -> pd.DataFrame:
         """One row per record: predicted classes, confidences, severity, class probabilities, warning."""

@@ -145,3 +145,42 @@ def test_a_file_without_names_whose_sidecar_names_its_time_column_gets_its_rate_
     m = load_measurement(p)
     assert m.fs_hz == pytest.approx(FS, rel=1e-6) and set(m.channels) == {"acc", "tacho"}
     np.testing.assert_array_equal(m.signal, a)
+
+
+@pytest.mark.parametrize("name,scale,decimals,sep", [("time_s", 1.0, 7, ","), ("time_s", 1.0, 5, ","),
+                                                     ("time_ms", 1e3, 3, ";")])
+def test_a_time_column_rounded_to_its_printed_decimals_gives_the_true_rate(tmp_path, name, scale, decimals, sep):
+    """12.8 kHz times written to 7 decimals (steps of 78 and 79 us) read 12804.1 Hz as 1 / median step, and to 5
+    decimals (10 us) or in ms to 3 decimals (decimal comma) they were refused as non-uniform; the rate is now the
+    least-squares step, the check allows the written resolution, and the rate comes back as 12800 Hz."""
+    n, fs = 6400, 12800.0
+    t = np.arange(n) / fs * scale
+    a = np.round(np.sin(2 * np.pi * 333.0 * t / scale), 4)
+    lines = [f"{name}{sep}acc"] + [f"{tv:.{decimals}f}{sep}{av:.4f}".replace(".", "," if sep == ";" else ".")
+                                   for tv, av in zip(t, a)]
+    p = tmp_path / "t.csv"
+    p.write_text("\n".join(lines) + "\n")
+    rec = read_record(p)
+    assert rec.fs_hz == pytest.approx(fs, rel=1e-9)
+    np.testing.assert_allclose(rec.data[:, 0], a)
+
+
+def test_a_gap_or_a_jitter_beyond_the_written_resolution_is_still_refused_and_fs_hz_suggested(tmp_path):
+    """Rounding to the printed digits is allowed, a missing sample or a 0.3 % jitter at 7 decimals is not; the
+    message says to give fs_hz in the sidecar, and a sidecar that gives it is then used in place of the column."""
+    from compare.measurement import Sidecar, load_measurement
+
+    fs = 12800.0
+    t = np.round(np.arange(6400) / fs, 7)
+    rng = np.random.default_rng(1)
+    a = np.round(rng.standard_normal(6400), 4)
+    for kind, tt, aa in (("gap", np.delete(t, 3000), np.delete(a, 3000)),
+                         ("jitter", t + np.round(rng.normal(0.0, 2.5e-7, t.size), 7), a)):
+        p = tmp_path / f"{kind}.csv"
+        p.write_text("time_s,acc\n" + "\n".join(f"{x:.7f},{y:.4f}" for x, y in zip(tt, aa)) + "\n")
+        with pytest.raises(InputError, match="non-uniform") as exc:
+            read_record(p)
+        assert "give fs_hz in the sidecar" in str(exc.value)
+        m = load_measurement(p, Sidecar.from_dict({"pair": "spur-gds", "speed_rpm": 1000.0, "torque_nm": 40.0,
+                                                   "fs_hz": fs, "sensor": "acc"}))
+        assert m.fs_hz == fs and m.channels.keys() == {"acc"}

@@ -178,12 +178,31 @@ def test_bad_sidecar_references_are_refused(tmp_path):
     with pytest.raises(InputError, match="reference"):
         load_measurements([a])
     b = _write_measurement(tmp_path, "b", 1000.0, seed=3, reference=ref.name)
-    with pytest.raises(InputError, match="reference"):
-        load_measurements([b, ref])                        # one record with a reference, one without
+    other = _write_measurement(tmp_path, "other", 1000.0, seed=6)
+    with pytest.raises(InputError, match="other.npz: reference"):
+        load_measurements([b, other])                      # one record with a reference, one without
     fast = _write_measurement(tmp_path, "fast", 1100.0, seed=4)
     c = _write_measurement(tmp_path, "c", 1000.0, seed=5, reference=fast.name)
     with pytest.raises(InputError, match="speed_rpm"):
         load_measurements([c])                             # 10 % faster: not the same operating point
+
+
+def test_records_and_their_references_share_a_folder(tmp_path):
+    """A file another file's sidecar names as its ``reference`` is that reference only, not a record of the run:
+    a folder of records with their references beside them (all with sidecars) reads as the records alone, each
+    with its reference; before, the references were records too and were refused for having no reference."""
+    from models.measurement_files import folder_files
+    from models.sources import load_measurements
+
+    refs = [_write_measurement(tmp_path, f"healthy{i}", 1000.0, seed=10 + i) for i in range(2)]
+    recs = [_write_measurement(tmp_path, f"r{i}", 1000.0, seed=20 + i, fault_depth=0.3, reference=refs[i].name)
+            for i in range(2)]
+    files, skipped = folder_files(tmp_path)
+    assert len(files) == 4 and skipped == []
+    d = load_measurements(files)
+    assert list(d.labels["file"]) == [r.name for r in recs]
+    alone = load_measurements([recs[1]])
+    np.testing.assert_array_equal(d.reference[1], alone.reference[0])
 
 
 def test_train_evaluate_predict_with_references_through_the_cli(machines, tmp_path, capsys):

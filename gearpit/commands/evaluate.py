@@ -11,7 +11,10 @@ from __future__ import annotations
 import json
 import os
 import sys
+from dataclasses import replace
 from pathlib import Path
+
+import numpy as np
 
 from gearpit.errors import require
 
@@ -36,9 +39,15 @@ def register(sub) -> None:
 
 
 def predict_any(model, data, *, crops: int, allow_mismatch: bool, threads: int = 1):
-    """Predictions of a CNN (``threads`` worker threads) or a feature baseline."""
+    """Predictions of a CNN (``threads`` worker threads) or a feature baseline; ``data`` a signal set or the groups
+    of measurement files (:class:`models.record_groups.RecordGroups`), each group checked, then predicted."""
     from models.classifier import CNNClassifier
+    from models.record_groups import RecordGroups
 
+    if isinstance(data, RecordGroups):
+        return data.predict(lambda d: predict_any(model, d, crops=crops, allow_mismatch=allow_mismatch,
+                                                  threads=threads), model.spec, allow_mismatch=allow_mismatch,
+                            novelty=model.novelty if isinstance(model, CNNClassifier) else model.novelty_model())
     if isinstance(model, CNNClassifier):
         return model.predict(data, n_crops=crops, allow_mismatch=allow_mismatch, threads=threads)
     return model.predict(data, allow_mismatch=allow_mismatch)
@@ -94,6 +103,12 @@ def load_data_without_meta(paths, **kw):
                                                                    " beside the file, named")) from None
 
 
+def measurement_notes(data) -> None:
+    """The files a folder run skipped, one line each on stderr."""
+    for line in getattr(data, "skipped", ()):
+        print(f"warning: {line}", file=sys.stderr)
+
+
 def run(args) -> int:
     from models.evaluate import evaluate, report_markdown, write_report
     from models.io import check_out_dir, load_model
@@ -103,10 +118,24 @@ def run(args) -> int:
     out = check_out_dir(args.out if args.out is not None else args.model / "eval", "--out")
     model = load_model(args.model)
     data = load_data_without_meta(args.data, channel=resolve_channel(model, args.data, args.channel), pair=args.pair,
-                                  refine_speed=not args.sidecar_speed)
-    require(data.has_labels(), "DATA", data.source, "labelled records (a severity_class label at least)")
+                                  refine_speed=not args.sidecar_speed, spec=model.spec,
+                                  allow_mismatch=args.allow_mismatch, classes=model.spec.severity_classes)
+    measurement_notes(data)
+    labelled = data.merged() if hasattr(data, "merged") else data
+    require(labelled.has_labels(), "DATA", labelled.source, "labelled records (a severity_class label at least)")
+    unscored = labelled.labels["severity_class"].isna().to_numpy()     # label 'unknown': predicted, not scored
+    require(not unscored.all(), "DATA", labelled.source, "at least one labelled record (not 'unknown')")
     pred = predict_any(model, data, crops=args.crops, allow_mismatch=args.allow_mismatch, threads=args.threads)
+    data = labelled
+    if unscored.any():
+        print(f"warning: {int(unscored.sum())} file(s) predicted but not scored (label 'unknown'): "
+              + ", ".join(str(v) for v in labelled.labels["file"][unscored]), file=sys.stderr)
+        keep = np.flatnonzero(~unscored)
+        data, pred = labelled.subset(keep), pred.subset(keep)
+        data = replace(data, source=", ".join(str(v) for v in data.labels["file"][:3])
+                       + (f" (+{len(data) - 3})" if len(data) > 3 else ""))
     metrics = evaluate(data, pred)
+    metrics["n_unscored"] = int(unscored.sum())
     metrics["model"] = str(args.model)
     note = no_novelty_note(model)
     if note:

@@ -42,7 +42,8 @@ def register(sub) -> None:
 
 def run(args) -> int:
     from gearpit.atomic import atomic_path
-    from gearpit.commands.evaluate import load_data_without_meta, no_novelty_note, predict_any, resolve_channel
+    from gearpit.commands.evaluate import (load_data_without_meta, measurement_notes, no_novelty_note, predict_any,
+                                           resolve_channel)
     from models.io import check_out_dir, load_model
 
     require(args.crops >= 1, "--crops", args.crops, "an integer >= 1")
@@ -50,8 +51,11 @@ def run(args) -> int:
         check_out_dir(args.out, "--out", file=True)
     model = load_model(args.model)
     data = load_data_without_meta(args.files, channel=resolve_channel(model, args.files, args.channel),
-                                  refine_speed=not args.sidecar_speed)
+                                  refine_speed=not args.sidecar_speed, spec=model.spec,
+                                  allow_mismatch=args.allow_mismatch)
+    measurement_notes(data)
     pred = predict_any(model, data, crops=args.crops, allow_mismatch=args.allow_mismatch, threads=args.threads)
+    data = data.merged() if hasattr(data, "merged") else data
     table = pred.to_frame()
     names = data.labels["file"] if "file" in data.labels else data.labels.get("sample_index", table.index)
     table.insert(0, "record", [str(v) for v in names])
