@@ -264,7 +264,7 @@ def test_a_missing_sidecar_is_not_sent_to_a_meta_flag_predict_lacks(models, tmp_
     capsys.readouterr()
     assert main(["predict", str(models / "a"), str(tmp_path / "rec.csv")]) == 2
     err = capsys.readouterr().err
-    assert err.startswith("gearpit predict: error: sidecar:") and "rec.toml or rec.json" in err
+    assert err.startswith("gearpit predict: error: rec.csv: sidecar:") and "rec.toml or rec.json" in err
     assert "--meta" not in err
 
 
