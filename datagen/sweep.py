@@ -33,7 +33,7 @@ are errors)::
     [pits]
     gear = "pinion"
     grid_px = [73, 200]                 # flank pixels (profile x face)
-    depth_mm = [0.1, 0.3]
+    depth_mm = [0.1, 0.3]                # within [0.001, 5] (datagen.pits.DEPTH_RANGE_M)
     aspect_w_to_s = [2.0, 6.0]          # optional (default: the flank's proportions)
     profiles = ["flat", "bowl"]
 
@@ -81,13 +81,13 @@ from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from pathlib import Path
 
-from datagen.case_options import StiffnessOptions, options_from_table
+from datagen.case_options import TORQUE_RANGE_NM, StiffnessOptions, options_from_table
 from datagen.class_grid import SeverityBin, TeethClass, class_grid, read_severity_bins, read_teeth_classes
 from datagen.draws import Draw, is_int, read_draw, read_int, read_names, read_number
 from datagen.geometry import GearPair, preset
 from datagen.pair_file import pair_from_dict
 from datagen.lumped_model import DriveTrain
-from datagen.pits import DEPTH_PROFILES, SHAPES, default_tolerance, max_severity
+from datagen.pits import DEPTH_PROFILES, DEPTH_RANGE_M, SHAPES, default_tolerance, max_severity
 from gearpit.errors import require
 from gearpit.tomlio import check_keys, read_toml
 
@@ -217,7 +217,7 @@ def sweep_from_dict(doc: Mapping) -> Sweep:
     if "tolerance" in pits:
         tol = read_number(pits["tolerance"], "pits.tolerance", positive=True)
         require(tol <= 0.05, "pits.tolerance", tol, "a number in (0, 0.05]")
-    depth = read_draw(pits.get("depth_mm", 0.2), "pits.depth_mm", "depth_m", "m", (1e-6, 5.0), scale=1e-3)
+    depth = read_draw(pits.get("depth_mm", 0.2), "pits.depth_mm", "depth_m", "m", DEPTH_RANGE_M, scale=1e-3)
     aspect = read_draw(pits["aspect_w_to_s"], "pits.aspect_w_to_s", "aspect_w_to_s", "-", (0.05, 50.0)) \
         if "aspect_w_to_s" in pits else None
     profile = read_draw(pits.get("profiles", ["flat"]), "pits.profiles", "profile", "-", choices=DEPTH_PROFILES)
@@ -225,7 +225,7 @@ def sweep_from_dict(doc: Mapping) -> Sweep:
     op = _table(doc, "operating")
     check_keys(op, _OPERATING, "operating", required=_OPERATING)
     speed = read_draw(op["speed_rpm"], "operating.speed_rpm", "speed_rpm", "rpm", (1.0, 1e5))
-    torque = read_draw(op["torque_nm"], "operating.torque_nm", "torque_nm", "N m", (1e-3, 1e6))
+    torque = read_draw(op["torque_nm"], "operating.torque_nm", "torque_nm", "N m", TORQUE_RANGE_NM)
     effects = _effects(doc.get("effects", {}))
     drive = _drive_train(doc.get("drive_train", {}))
     stiffness = options_from_table(StiffnessOptions, dict(_table(doc, "stiffness")), "stiffness") \
