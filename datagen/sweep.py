@@ -335,13 +335,19 @@ def _check_feasible(sweep: Sweep) -> None:
         for d in draws:  # every corner value builds (bounds are checked by the effect itself)
             for v in d.span:
                 cls(**{d.name: v})
-    for pair in sweep.pairs:  # the simulation's own checks (fs vs mesh frequency, duration >= 1 rev)
+    from datagen.pits import PitSpec
+
+    # the most pitted teeth a sample gets: the stiffness record must fit its budget with them
+    worst = max((tc.high for tc in sweep.teeth_classes), default=0)
+    pits = PitSpec(shape="ellipse", teeth=tuple(range(worst)), severity=0.1) if worst else None
+    for pair in sweep.pairs:  # the simulation's own checks (fs vs mesh frequency, duration >= 1 rev, stiffness)
         axial = [c for c in sweep.channels if "axial" in c]
         require(pair.is_helical or not axial, "sweep.channels", axial, f"no axial channels (pair {pair.name} is spur)")
         for speed in sweep.speed_rpm.span:
             for torque in sweep.torque_nm.span:
                 Case(pair=pair, operating=OperatingPoint(speed, torque), duration_s=sweep.duration_s,
-                     fs_hz=sweep.fs_hz)
+                     fs_hz=sweep.fs_hz, stiffness=sweep.stiffness, pits=pits, pit_gear=sweep.gear,
+                     pit_grid=sweep.grid_px)
 
 
 def _check_rectangle_resolution(grid, b: SeverityBin, tol: float, aspects, where: str) -> None:

@@ -11,7 +11,7 @@ from datagen.geometry import PRESETS, preset
 from datagen.pair_file import load_pair
 from datagen.pit_stiffness import PIT_MODELS
 from datagen.pitshapes import require_depth
-from datagen.stiffness import mesh_stiffness
+from datagen.stiffness import mesh_stiffness, require_n_slices, require_record_fits, resolve_n_slices
 from gearpit.atomic import atomic_path
 from gearpit.errors import InputError, require
 from gearpit.tomlio import check_keys, read_toml
@@ -85,7 +85,14 @@ def write_stiffness_csv(ms, path: Path) -> None:
 
 def run(args: argparse.Namespace) -> int:
     pair = load_pair(args.pair) if args.pair else preset(args.preset)
+    if args.n_slices is not None:
+        require_n_slices(pair, args.n_slices, "--n-slices")
     pits = build_pits(args, pair)
+    require(args.positions_per_cycle >= 4, "--positions-per-cycle", args.positions_per_cycle, "an integer >= 4")
+    n_slices = resolve_n_slices(pair, () if pits is None else (pits,), args.n_slices)
+    require_record_fits(pair, args.positions_per_cycle, n_slices,
+                        None if pits is None else {pits.gear: len(pits.pitted_teeth)}, "--positions-per-cycle",
+                        records=1 if pits is None else 2)    # a pitted record is drawn beside the healthy one
     ms = mesh_stiffness(pair, pits=pits, positions_per_cycle=args.positions_per_cycle, n_slices=args.n_slices,
                         pit_model=args.pit_model)
     from datagen.stiffness_plot import plot_stiffness
