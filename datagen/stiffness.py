@@ -327,7 +327,7 @@ def record_bytes(pair, positions_per_cycle: int, n_slices: int, pitted_teeth=Non
     spur-gds; 1 to 1000 slices, 0 to 4 pitted teeth on either gear): 5.3-10.9 cycle arrays at the peak, under
     this estimate (6 healthy, 9 + E pitted), plus :data:`RECORD_FIXED_BYTES` whatever the size (the pair's
     tables; 0.3-0.5 MB measured). At the largest count the budget allows (helical-dct, pits on 2 teeth over
-    1000 slices, healthy and pitted records: 2825 positions) ``gearpit stiffness`` peaked at 1.2 GB resident.
+    1000 slices, healthy and pitted records: 2819 positions) ``gearpit stiffness`` peaked at 1.2 GB resident.
     """
     z = {"pinion": pair.pinion.teeth, "wheel": pair.wheel.teeth}
     pitted = {g: int(k) for g, k in (pitted_teeth or {}).items() if k}
@@ -344,9 +344,10 @@ def require_record_fits(pair, positions_per_cycle: int, n_slices: int, pitted_te
     """Raise :class:`InputError` naming ``field`` when ``records`` stiffness records of ``positions_per_cycle``
     positions need more than :data:`STIFFNESS_BUDGET_BYTES` (:func:`record_bytes`); the message gives the
     largest count that fits."""
-    per_position = records * record_bytes(pair, 1, n_slices, pitted_teeth)
-    top = int(STIFFNESS_BUDGET_BYTES // per_position)
-    need = per_position * positions_per_cycle
+    fixed = records * record_bytes(pair, 0, n_slices, pitted_teeth)
+    per_position = records * record_bytes(pair, 1, n_slices, pitted_teeth) - fixed
+    top = int((STIFFNESS_BUDGET_BYTES - fixed) // per_position)
+    need = fixed + per_position * positions_per_cycle
     pits = ", ".join(f"{k} pitted {g} teeth" for g, k in (pitted_teeth or {}).items() if k) or "no pits"
     require(need <= STIFFNESS_BUDGET_BYTES, field, positions_per_cycle,
             f"an integer in [4, {max(top, 4)}] for pair {pair.name} with {n_slices} slices and {pits}: "

@@ -80,6 +80,17 @@ def test_record_bytes_bounds_the_measured_peak(pair, n_slices, teeth, gear):
     assert peak < est < 2.5 * peak, (peak, est)
 
 
+def test_largest_count_is_accepted_and_one_more_refused():
+    """The count the error names fits the budget; one more does not (the estimate is linear in positions)."""
+    pitted = {"pinion": 2}
+    per_position = st.record_bytes(HEL, 1, 1000, pitted) - st.RECORD_FIXED_BYTES
+    top = int((st.STIFFNESS_BUDGET_BYTES - st.RECORD_FIXED_BYTES) // per_position)
+    st.require_record_fits(HEL, top, 1000, pitted)
+    with pytest.raises(InputError, match=f"an integer in \\[4, {top}\\]"):
+        st.require_record_fits(HEL, top + 1, 1000, pitted)
+    st.require_record_fits(SPUR, 4096, 1)      # the band's largest automatic count, spur: 11 MB
+
+
 def test_too_many_positions_refused_before_work_with_the_largest_that_fits(tmp_path, capsys, monkeypatch):
     """`--positions-per-cycle 100000` with pits allocated 24 GB; now refused, naming the largest count that fits
     the 2 GB budget, on the CLI and in a case file."""
@@ -91,7 +102,8 @@ def test_too_many_positions_refused_before_work_with_the_largest_that_fits(tmp_p
     assert main(["stiffness", "--preset", "helical-dct", "--pits", str(pits), "--positions-per-cycle", "100000",
                  "--out", str(out)]) == 2
     err = capsys.readouterr().err
-    top = int(st.STIFFNESS_BUDGET_BYTES // (2 * st.record_bytes(HEL, 1, 1000, {"pinion": 2})))
+    per_position = st.record_bytes(HEL, 1, 1000, {"pinion": 2}) - st.RECORD_FIXED_BYTES
+    top = int((st.STIFFNESS_BUDGET_BYTES - 2 * st.RECORD_FIXED_BYTES) // (2 * per_position))
     assert f"--positions-per-cycle: got 100000; allowed: an integer in [4, {top}]" in err and "budget 2 GB" in err
     assert not out.exists() and not calls
     with pytest.raises(InputError) as exc:
@@ -100,7 +112,8 @@ def test_too_many_positions_refused_before_work_with_the_largest_that_fits(tmp_p
                         "stiffness": {"positions_per_cycle": 100000},
                         "pits": {"grid": [64, 1000], "shape": "ellipse", "teeth": [0], "severity": 0.2}})
     assert exc.value.field == "stiffness.positions_per_cycle" and exc.value.value == 100000
-    top = int(st.STIFFNESS_BUDGET_BYTES // st.record_bytes(HEL, 1, 1000, {"pinion": 1}))
+    per_position = st.record_bytes(HEL, 1, 1000, {"pinion": 1}) - st.RECORD_FIXED_BYTES
+    top = int((st.STIFFNESS_BUDGET_BYTES - st.RECORD_FIXED_BYTES) // per_position)
     assert exc.value.allowed.startswith(f"an integer in [4, {top}]")
     with pytest.raises(InputError, match="positions_per_cycle"):
         st.mesh_stiffness(HEL, positions_per_cycle=100000, n_slices=2000)
