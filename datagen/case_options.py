@@ -11,6 +11,11 @@ from gearpit.errors import require, require_positive, require_range
 from gearpit.tomlio import check_keys
 
 
+#: allowed pinion torque (N m) of a case and a sweep: an unloaded pair (0 N m) has no static mesh deflection, and
+#: the periodic solution divides by it (all-zero channels, a NaN periodicity error)
+TORQUE_RANGE_NM = (1e-3, 1e6)
+
+
 @dataclass(frozen=True)
 class OperatingPoint:
     """Nominal operating point.
@@ -20,7 +25,7 @@ class OperatingPoint:
     speed_rpm : float
         Pinion (input shaft) speed (rpm), > 0.
     torque_nm : float
-        Pinion (input shaft) torque (N m), >= 0; the load torque is ``torque_nm * z2 / z1``.
+        Pinion (input shaft) torque (N m), in :data:`TORQUE_RANGE_NM`; the load torque is ``torque_nm * z2 / z1``.
     """
 
     speed_rpm: float
@@ -28,7 +33,10 @@ class OperatingPoint:
 
     def __post_init__(self):
         require_positive("operating.speed_rpm", self.speed_rpm)
-        require_range("operating.torque_nm", self.torque_nm, 0.0, 1e7)
+        lo, hi = TORQUE_RANGE_NM
+        ok = isinstance(self.torque_nm, (int, float)) and not isinstance(self.torque_nm, bool) \
+            and lo <= self.torque_nm <= hi
+        require(ok, "operating.torque_nm", self.torque_nm, f"a number in [{lo:g}, {hi:g}] N m (> 0: a loaded pair)")
 
 
 #: ``omega_max dt`` of a case whose ``[solver] omega_dt`` is unset and whose effects ask for no finer step

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 
-from gearpit.errors import DesignError
+from gearpit.errors import DesignError, DesignLimitError
 
 
 def check_design(pair) -> None:
@@ -32,9 +32,8 @@ def check_design(pair) -> None:
                 f"{which}.teeth: {g.teeth} teeth with profile shift {g.profile_shift} are undercut "
                 f"(needs h_a* - x <= {limit:.3f}); allowed: >= {z_min} teeth or a larger profile shift")
         if g.bore_radius_m >= pair.root_radius_m(which) - mn:
-            raise DesignError(
-                f"{which}.bore_radius_m: {g.bore_radius_m} m leaves no rim; allowed: < "
-                f"{pair.root_radius_m(which) - mn:.6g} m (root radius minus one module)")
+            raise DesignLimitError(f"{which}.bore_radius_m", g.bore_radius_m, pair.root_radius_m(which) - mn, "m",
+                                   "leaves no rim", "root radius minus one module")
         sa = pair.tooth_thickness_at_m(which, pair.tip_radius_m(which))
         if sa < 0.2 * pair.module_t_m:
             raise DesignError(

@@ -96,7 +96,7 @@ def read_draw(v, field, name, unit, bounds=None, *, scale=1.0, choices=None, int
     name, unit : str
         Name and SI unit of the drawn parameter.
     bounds : (float, float)
-        Allowed SI interval of numeric values.
+        Allowed SI interval of numeric values (stated in the file's unit, ``bounds / scale``, in errors).
     scale : float
         Factor from the file's unit to SI (``1e-3`` for a ``_mm`` key).
     choices : tuple of str, optional
@@ -108,7 +108,10 @@ def read_draw(v, field, name, unit, bounds=None, *, scale=1.0, choices=None, int
         vals = [v] if isinstance(v, str) else v
         return Draw(name, "choice", read_names(vals, field, choices), unit)
     lo_b, hi_b = bounds
-    allowed = f"a number, [lo, hi] with lo <= hi or {{choices = [a, b, ...]}}, within [{lo_b:g}, {hi_b:g}]"
+    # the bounds as the file gives the value (its key's unit)
+    kind = "an integer, [lo, hi] of integers" if integer else "a number, [lo, hi]"
+    allowed = (f"{kind} with lo <= hi or {{choices = [a, b, ...]}}, within "
+               f"[{lo_b / scale:g}, {hi_b / scale:g}]")
     levels = isinstance(v, Mapping)
     if levels:
         require(set(v) == {"choices"} and isinstance(v["choices"], list) and len(v["choices"]) > 0, field, v,

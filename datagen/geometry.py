@@ -92,6 +92,12 @@ class Gear:
     bore_radius_m: float = 0.01
 
 
+#: allowed range (SI, ends included) of the bounded scalar fields of a :class:`Gear` and a :class:`GearPair`; the
+#: file boundary (:mod:`datagen.pair_file`) states them in the file's units
+FIELD_RANGES = {"profile_shift": (-1.0, 1.5), "pressure_angle_n_rad": (math.radians(10), math.radians(35)),
+                "helix_angle_rad": (0.0, math.radians(45)), "addendum_coef": (0.5, 1.5)}
+
+
 @dataclass(frozen=True)
 class GearPair:
     """A meshing involute gear pair (pinion drives wheel).
@@ -130,11 +136,10 @@ class GearPair:
                     f"{g}.teeth", gear.teeth, "an integer >= 5")
             require_positive(f"{g}.face_width_m", gear.face_width_m)
             require_positive(f"{g}.bore_radius_m", gear.bore_radius_m)
-            require_range(f"{g}.profile_shift", gear.profile_shift, -1.0, 1.5)
+            require_range(f"{g}.profile_shift", gear.profile_shift, *FIELD_RANGES["profile_shift"])
         require_positive("module_n_m", self.module_n_m)
-        require_range("pressure_angle_n_rad", self.pressure_angle_n_rad, math.radians(10), math.radians(35))
-        require_range("helix_angle_rad", self.helix_angle_rad, 0.0, math.radians(45))
-        require_range("addendum_coef", self.addendum_coef, 0.5, 1.5)
+        for name in ("pressure_angle_n_rad", "helix_angle_rad", "addendum_coef"):
+            require_range(name, getattr(self, name), *FIELD_RANGES[name])
         require_range("dedendum_coef", self.dedendum_coef, self.addendum_coef, 2.0, lo_open=True)
         check_design(self)
 
@@ -404,4 +409,4 @@ def with_helix(pair: GearPair, helix_angle_rad: float) -> GearPair:
 
 __all__ = [
     "Material", "Gear", "GearPair", "preset", "PRESETS",
-    "spur_pair_example", "helical_pair_example", "with_helix", "inv", "inv_inverse"]
+    "spur_pair_example", "helical_pair_example", "with_helix", "inv", "inv_inverse", "FIELD_RANGES"]

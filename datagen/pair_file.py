@@ -7,8 +7,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from datagen.geometry import Gear, GearPair, Material, preset
-from gearpit.errors import InputError
+from datagen.geometry import FIELD_RANGES, Gear, GearPair, Material, preset
+from gearpit.errors import DesignError, DesignLimitError, InputError
 from gearpit.tomlio import check_keys, read_toml
 
 _PAIR_KEYS = {"name", "preset", "module_n_mm", "pressure_angle_n_deg", "helix_angle_deg", "addendum_coef",
@@ -18,9 +18,18 @@ _MAT_KEYS = {"youngs_modulus_gpa", "poisson", "density_kg_m3"}
 
 
 _POSITIVE_KEYS = {"face_width_mm", "bore_radius_mm", "module_n_mm", "youngs_modulus_gpa", "density_kg_m3"}
+#: key of a pair file -> (field of the SI objects, factor from the key's unit to SI, the key's unit): the one place
+#: where a pair's units are converted, and where errors are named as the file gives them
+FILE_UNITS = {"module_n_mm": ("module_n_m", 1e-3, "mm"), "face_width_mm": ("face_width_m", 1e-3, "mm"),
+              "bore_radius_mm": ("bore_radius_m", 1e-3, "mm"), "youngs_modulus_gpa": ("youngs_modulus_pa", 1e9, "GPa"),
+              "pressure_angle_n_deg": ("pressure_angle_n_rad", math.pi / 180.0, "deg"),
+              "helix_angle_deg": ("helix_angle_rad", math.pi / 180.0, "deg")}
+_SI_KEYS = {si: (key, factor, unit) for key, (si, factor, unit) in FILE_UNITS.items()}
 
 
-def _num(table: dict, key: str, where: str, default=None):
+def _num(table: dict, key: str, where: str, default=None) -> float:
+    """``table[key]`` (or ``default``) checked in the key's unit against :data:`datagen.geometry.FIELD_RANGES`,
+    returned in SI."""
     v = table.get(key, default)
     name = f"{where}.{key}" if where else key
     if v is None:
@@ -29,13 +38,20 @@ def _num(table: dict, key: str, where: str, default=None):
         raise InputError(name, v, "a finite number")
     if key in _POSITIVE_KEYS and v <= 0:
         raise InputError(name, v, "a number > 0")
-    return v
+    si_name, factor, unit = FILE_UNITS.get(key, (key, 1.0, ""))
+    if si_name in FIELD_RANGES:
+        lo, hi = FIELD_RANGES[si_name]
+        if not lo <= v * factor <= hi:
+            raise InputError(name, v, f"a number in [{lo / factor:g}, {hi / factor:g}]" + (f" {unit}" if unit else ""))
+    return v * factor
 
 
 def pair_from_dict(d: dict, where: str = "pair") -> GearPair:
     """Build a :class:`GearPair` from its TOML form (units in key names: mm, deg, GPa).
 
-    A ``preset = "name"`` key starts from a preset; other keys override it.
+    A ``preset = "name"`` key starts from a preset; other keys override it. Every error names the key as the
+    file gives it, under ``where`` (``pair.helix_angle_deg``, ``sweep.pairs[0].pinion.bore_radius_mm``), with
+    values and limits in its unit.
     """
     if not isinstance(d, dict):
         raise InputError(where, d, "a table of gear-pair keys")
@@ -56,22 +72,37 @@ def pair_from_dict(d: dict, where: str = "pair") -> GearPair:
         teeth = t["teeth"]
         if isinstance(teeth, bool) or not isinstance(teeth, int):
             raise InputError(f"{where}.{w}.teeth", teeth, "an integer >= 5")
-        gears[w] = Gear(teeth=teeth, face_width_m=_num(t, "face_width_mm", f"{where}.{w}") * 1e-3,
+        gears[w] = Gear(teeth=teeth, face_width_m=_num(t, "face_width_mm", f"{where}.{w}"),
                         profile_shift=_num(t, "profile_shift", f"{where}.{w}", 0.0),
-                        bore_radius_m=_num(t, "bore_radius_mm", f"{where}.{w}", 10.0) * 1e-3)
+                        bore_radius_m=_num(t, "bore_radius_mm", f"{where}.{w}", 10.0))
     m = merged.get("material", {})
     check_keys(m, _MAT_KEYS, f"{where}.material")
-    mat = Material(youngs_modulus_pa=_num(m, "youngs_modulus_gpa", f"{where}.material", 210.0) * 1e9,
-                   poisson=_num(m, "poisson", f"{where}.material", 0.3),
-                   density_kg_m3=_num(m, "density_kg_m3", f"{where}.material", 7850.0))
-    return GearPair(
-        pinion=gears["pinion"], wheel=gears["wheel"],
-        module_n_m=_num(merged, "module_n_mm", where) * 1e-3,
-        pressure_angle_n_rad=math.radians(_num(merged, "pressure_angle_n_deg", where, 20.0)),
-        helix_angle_rad=math.radians(_num(merged, "helix_angle_deg", where, 0.0)),
-        addendum_coef=_num(merged, "addendum_coef", where, 1.0),
-        dedendum_coef=_num(merged, "dedendum_coef", where, 1.25),
-        material=mat, name=str(merged.get("name", "custom")))
+    kwargs = dict(module_n_m=_num(merged, "module_n_mm", where),
+                  pressure_angle_n_rad=_num(merged, "pressure_angle_n_deg", where, 20.0),
+                  helix_angle_rad=_num(merged, "helix_angle_deg", where, 0.0),
+                  addendum_coef=_num(merged, "addendum_coef", where, 1.0),
+                  dedendum_coef=_num(merged, "dedendum_coef", where, 1.25))
+    try:
+        mat = Material(youngs_modulus_pa=_num(m, "youngs_modulus_gpa", f"{where}.material", 210.0),
+                       poisson=_num(m, "poisson", f"{where}.material", 0.3),
+                       density_kg_m3=_num(m, "density_kg_m3", f"{where}.material", 7850.0))
+        return GearPair(pinion=gears["pinion"], wheel=gears["wheel"], material=mat,
+                        name=str(merged.get("name", "custom")), **kwargs)
+    except (InputError, DesignLimitError) as e:      # the checks of the SI objects, named as the file names them
+        raise _as_written(e, where) from None
+    except DesignError as e:
+        raise DesignError(f"{where}: {e}") from None
+
+
+def _as_written(e, where: str):
+    """``e`` (an :class:`InputError` or :class:`DesignLimitError` of the SI objects) under ``where``, its field the
+    file's key and its numbers in that key's unit (:data:`FILE_UNITS`)."""
+    head, _, last = e.field.rpartition(".")
+    key, factor, unit = _SI_KEYS.get(last, (last, 1.0, getattr(e, "unit", "")))
+    field = f"{where}.{head}.{key}" if head else f"{where}.{key}"
+    if isinstance(e, InputError):
+        return InputError(field, e.value / factor if factor != 1.0 else e.value, e.allowed)
+    return e.in_units(field, factor, unit)
 
 
 def load_pair(path: str | Path) -> GearPair:

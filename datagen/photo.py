@@ -53,7 +53,7 @@ from scipy import ndimage
 from skimage.filters import threshold_otsu
 
 from datagen.flank import FlankGrid, PitMap
-from datagen.pitshapes import DEFAULT_DEPTH_M
+from datagen.pitshapes import DEFAULT_DEPTH_M, require_depth
 from gearpit.errors import InputError, require, require_positive
 
 FLATTEN_METHODS = ("polynomial", "blur", "none")
@@ -355,7 +355,7 @@ def pit_map_from_image(path: str | Path | np.ndarray, grid: FlankGrid, *, gear: 
 
     Extraction parameters as in :func:`mask_from_image`.
     """
-    require_positive("pits.depth_m", depth_m)
+    require_depth("pits.depth_m", depth_m)
     require(isinstance(tooth, int) and not isinstance(tooth, bool) and tooth >= 0, "pits.tooth", tooth,
             "an integer >= 0")
     mask = mask_from_image(path, grid, crop=crop, rot90=rot90, sigma_px=sigma_px, flatten=flatten,

@@ -31,9 +31,9 @@ import cv2
 import numpy as np
 
 from datagen.flank import FlankGrid, PitMap
-from datagen.pitshapes import DEFAULT_DEPTH_M
+from datagen.pitshapes import DEFAULT_DEPTH_M, require_depth
 from gearpit.atomic import atomic_path
-from gearpit.errors import InputError, require, require_positive
+from gearpit.errors import InputError, require
 
 NPZ_FORMAT = "gearpit.pitmap/1"
 _TOOTH_PNG = re.compile(r"^tooth_(\d+)\.png$")
@@ -74,7 +74,7 @@ def read_depth_png(path: str | Path, grid: FlankGrid, *, default_depth_m: float 
     grid : FlankGrid
         The image must have exactly ``grid.shape`` (rows = profile, columns = face).
     default_depth_m : float
-        Depth (m) given to the pits of an 8-/1-bit mask image.
+        Depth (m) given to the pits of an 8-/1-bit mask image, in :data:`datagen.pitshapes.DEPTH_RANGE_M`.
     invert : bool
         For a mask image: dark pixels (< 128) are the pits.
 
@@ -83,7 +83,7 @@ def read_depth_png(path: str | Path, grid: FlankGrid, *, default_depth_m: float 
     InputError
         Unreadable file, wrong shape, or an unsupported pixel type.
     """
-    require_positive("png.default_depth_m", default_depth_m)
+    require_depth("png.default_depth_m", default_depth_m)
     img = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
     if img is None:
         raise InputError("png", str(path), "a readable PNG file")
@@ -93,6 +93,9 @@ def read_depth_png(path: str | Path, grid: FlankGrid, *, default_depth_m: float 
         raise InputError(f"png.shape ({Path(path).name})", img.shape,
                          f"the flank grid shape {grid.shape} (rows = profile, columns = face)")
     if img.dtype == np.uint16:
+        deepest_um = int(img.max(initial=0))
+        if deepest_um > 0:      # the deepest pixel, in the image's own unit (um)
+            require_depth(f"png.depth ({Path(path).name}, deepest pixel)", deepest_um, "um")
         return img.astype(np.float64) * _UM
     require(img.dtype == np.uint8, f"png.dtype ({Path(path).name})", str(img.dtype),
             "8-bit (mask) or 16-bit (depth in um) grayscale")

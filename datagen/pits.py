@@ -27,13 +27,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from datagen.flank import FlankGrid, PitMap
-from datagen.pitshapes import (CLUSTER_MAX_SEVERITY, DEFAULT_DEPTH_M, DEPTH_PROFILES, cluster, default_tolerance,
-                               ellipse, max_severity, rectangle, sized_pit)
+from datagen.pitshapes import (CLUSTER_MAX_SEVERITY, DEFAULT_DEPTH_M, DEPTH_PROFILES, DEPTH_RANGE_M, cluster,
+                               default_tolerance, ellipse, max_severity, rectangle, require_depth, sized_pit)
 from gearpit.errors import require, require_positive, require_range
 from gearpit.tomlio import check_keys
 
 __all__ = ["SHAPES", "PitSpec", "make_pit_map", "tooth_rng", "ellipse", "rectangle", "cluster", "sized_pit",
-           "max_severity", "default_tolerance", "DEFAULT_DEPTH_M", "DEPTH_PROFILES", "CLUSTER_MAX_SEVERITY"]
+           "max_severity", "default_tolerance", "DEFAULT_DEPTH_M", "DEPTH_PROFILES", "DEPTH_RANGE_M", "require_depth",
+           "CLUSTER_MAX_SEVERITY"]
 
 SHAPES = ("ellipse", "rectangle", "cluster")
 
@@ -72,7 +73,7 @@ def make_pit_map(grid: FlankGrid, *, shape: str, severity: float | Mapping[int, 
         adding or removing a tooth leaves the others unchanged. Ellipses and
         rectangles are deterministic and ignore it.
     depth_m : float
-        Pit depth (m), default 0.2 mm [1]_.
+        Pit depth (m), default 0.2 mm [1]_, in :data:`DEPTH_RANGE_M` (1 um .. 5 mm).
     tolerance : float, optional
         Allowed |achieved - target| severity, default :func:`default_tolerance`.
     aspect_w_to_s : float, optional
@@ -112,7 +113,7 @@ def make_pit_map(grid: FlankGrid, *, shape: str, severity: float | Mapping[int, 
 def _check_options(seed, depth_m, tolerance, aspect_w_to_s, profile, pit_diameter_m, spread_s_m) -> None:
     require(isinstance(seed, (int, np.integer)) and not isinstance(seed, bool) and seed >= 0,
             "pits.seed", seed, "an integer >= 0")
-    require_positive("pits.depth_m", depth_m)
+    require_depth("pits.depth_m", depth_m)
     if tolerance is not None:
         require_range("pits.tolerance", tolerance, 0.0, 0.1, lo_open=True)
     for name, v in (("aspect_w_to_s", aspect_w_to_s), ("pit_diameter_m", pit_diameter_m),
@@ -209,7 +210,7 @@ class PitSpec:
         """Build from a TOML table; lengths are given in mm (``depth_mm``, ...).
 
         Required keys: ``shape``, ``teeth``, ``severity`` (a fraction, one
-        number or one per tooth). Optional: ``depth_mm`` (default 0.2),
+        number or one per tooth). Optional: ``depth_mm`` (default 0.2, in [0.001, 5]),
         ``seed``, ``aspect_w_to_s``, ``tolerance``, ``profile``,
         ``pit_diameter_mm``, ``spread_s_mm``. Unknown keys raise InputError.
 
@@ -227,6 +228,8 @@ class PitSpec:
         kwargs = {}
         for key, value in table.items():
             name, factor = TOML_KEYS[key]
+            if key == "depth_mm":
+                require_depth(f"{where}.{key}", value, "mm")
             if factor is not None:
                 require(_is_number(value) and value > 0, f"{where}.{key}", value, "a finite number > 0 (mm)")
                 value = float(value) * factor

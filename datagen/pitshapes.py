@@ -43,9 +43,32 @@ DEPTH_PROFILES = ("flat", "bowl")
 BOWL_RIM_FRACTION = 0.1
 #: default pit depth (m): the helical paper's uniform 0.2 mm [1]
 DEFAULT_DEPTH_M = 0.2e-3
+#: allowed pit depth (m), wherever a depth is given (pit tables, sweeps, masks, photos, the tooth_pit effect): 1 um
+#: (the resolution of a 16-bit depth PNG) to 5 mm (a broken tooth's section loss,
+#: :data:`datagen.effects.tooth_breakage.BROKEN_DEPTH_M`)
+DEPTH_RANGE_M = (1e-6, 5e-3)
+#: units a pit depth is given in: factor to m
+_DEPTH_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6}
 #: highest severity a progressive cluster is asked to reach (beyond it the flank is spalled)
 CLUSTER_MAX_SEVERITY = 0.6
 _BATCH = 256  # cluster pits drawn per batch (fixed, so the sequence never depends on the target)
+
+
+def require_depth(field: str, value, unit: str = "m") -> None:
+    """Raise :class:`InputError` unless the pit depth ``value`` (in ``unit``: "m", "mm" or "um") lies in
+    :data:`DEPTH_RANGE_M`; the message states the range in ``unit``.
+
+    >>> require_depth("pits.depth_mm", 0.2, "mm")
+    >>> require_depth("pits.depth_mm", 4000.0, "mm")
+    Traceback (most recent call last):
+    ...
+    gearpit.errors.InputError: pits.depth_mm: got 4000.0; allowed: a number in [0.001, 5] mm
+    """
+    scale = _DEPTH_UNITS[unit]
+    lo, hi = DEPTH_RANGE_M
+    ok = (isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+          and math.isfinite(value) and lo <= value * scale <= hi)
+    require(ok, field, value, f"a number in [{lo / scale:g}, {hi / scale:g}] {unit}")
 
 
 def default_tolerance(grid: FlankGrid) -> float:

@@ -34,7 +34,7 @@ are errors)::
     [pits]
     gear = "pinion"
     grid_px = [73, 200]                 # flank pixels (profile x face)
-    depth_mm = [0.1, 0.3]
+    depth_mm = [0.1, 0.3]                # within [0.001, 5] (datagen.pits.DEPTH_RANGE_M)
     aspect_w_to_s = [2.0, 6.0]          # optional (default: the flank's proportions)
     profiles = ["flat", "bowl"]
 
@@ -82,13 +82,13 @@ from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from pathlib import Path
 
-from datagen.case_options import StiffnessOptions, options_from_table
+from datagen.case_options import TORQUE_RANGE_NM, StiffnessOptions, options_from_table
 from datagen.class_grid import SeverityBin, TeethClass, class_grid, read_severity_bins, read_teeth_classes
 from datagen.draws import Draw, is_int, read_draw, read_int, read_names, read_number
 from datagen.geometry import GearPair, preset
 from datagen.pair_file import pair_from_dict
 from datagen.lumped_model import DriveTrain
-from datagen.pits import DEPTH_PROFILES, SHAPES, default_tolerance, max_severity
+from datagen.pits import DEPTH_PROFILES, DEPTH_RANGE_M, SHAPES, default_tolerance, max_severity
 from gearpit.errors import require
 from gearpit.tomlio import check_keys, read_toml
 
@@ -227,7 +227,7 @@ def sweep_from_dict(doc: Mapping, *, base_dir: str | Path | None = None,
     if "tolerance" in pits:
         tol = read_number(pits["tolerance"], "pits.tolerance", positive=True)
         require(tol <= 0.05, "pits.tolerance", tol, "a number in (0, 0.05]")
-    depth = read_draw(pits.get("depth_mm", 0.2), "pits.depth_mm", "depth_m", "m", (1e-6, 5.0), scale=1e-3)
+    depth = read_draw(pits.get("depth_mm", 0.2), "pits.depth_mm", "depth_m", "m", DEPTH_RANGE_M, scale=1e-3)
     aspect = read_draw(pits["aspect_w_to_s"], "pits.aspect_w_to_s", "aspect_w_to_s", "-", (0.05, 50.0)) \
         if "aspect_w_to_s" in pits else None
     profile = read_draw(pits.get("profiles", ["flat"]), "pits.profiles", "profile", "-", choices=DEPTH_PROFILES)
@@ -235,7 +235,7 @@ def sweep_from_dict(doc: Mapping, *, base_dir: str | Path | None = None,
     op = _table(doc, "operating")
     check_keys(op, _OPERATING, "operating", required=_OPERATING)
     speed = read_draw(op["speed_rpm"], "operating.speed_rpm", "speed_rpm", "rpm", (1.0, 1e5))
-    torque = read_draw(op["torque_nm"], "operating.torque_nm", "torque_nm", "N m", (1e-3, 1e6))
+    torque = read_draw(op["torque_nm"], "operating.torque_nm", "torque_nm", "N m", TORQUE_RANGE_NM)
     loaded = _plugins(sw.get("plugins", []), base_dir, plugins)
     effects = _effects(doc.get("effects", {}))
     drive = _drive_train(doc.get("drive_train", {}))
@@ -361,13 +361,19 @@ def _check_feasible(sweep: Sweep) -> None:
         for d in draws:  # every corner value builds (bounds are checked by the effect itself)
             for v in d.span:
                 cls(**{d.name: v})
-    for pair in sweep.pairs:  # the simulation's own checks (fs vs mesh frequency, duration >= 1 rev)
+    from datagen.pits import PitSpec
+
+    # the most pitted teeth a sample gets: the stiffness record must fit its budget with them
+    worst = max((tc.high for tc in sweep.teeth_classes), default=0)
+    pits = PitSpec(shape="ellipse", teeth=tuple(range(worst)), severity=0.1) if worst else None
+    for pair in sweep.pairs:  # the simulation's own checks (fs vs mesh frequency, duration >= 1 rev, stiffness)
         axial = [c for c in sweep.channels if "axial" in c]
         require(pair.is_helical or not axial, "sweep.channels", axial, f"no axial channels (pair {pair.name} is spur)")
         for speed in sweep.speed_rpm.span:
             for torque in sweep.torque_nm.span:
                 Case(pair=pair, operating=OperatingPoint(speed, torque), duration_s=sweep.duration_s,
-                     fs_hz=sweep.fs_hz)
+                     fs_hz=sweep.fs_hz, stiffness=sweep.stiffness, pits=pits, pit_gear=sweep.gear,
+                     pit_grid=sweep.grid_px)
 
 
 def _check_rectangle_resolution(grid, b: SeverityBin, tol: float, aspects, where: str) -> None:

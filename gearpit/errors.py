@@ -35,6 +35,36 @@ class DesignError(GearpitError):
     """A gear pair that cannot be built or cannot mesh (undercut, interference, ...)."""
 
 
+class DesignLimitError(DesignError):
+    """A design limit that one field breaks: ``field`` must stay below ``limit`` (a bore that leaves no rim).
+
+    Parameters
+    ----------
+    field : str
+        Dotted name of the field (``"pinion.bore_radius_m"``).
+    value, limit : float
+        The field's value and the limit it must stay below, in ``unit``.
+    unit : str
+    what : str
+        What the value does (``"leaves no rim"``).
+    why : str
+        Where the limit comes from (``"root radius minus one module"``).
+
+    A file boundary that gives the field in other units re-expresses it with :meth:`in_units`.
+    """
+
+    def __init__(self, field: str, value: float, limit: float, unit: str, what: str, why: str):
+        self.field, self.value, self.limit, self.unit, self.what, self.why = field, value, limit, unit, what, why
+        super().__init__(f"{field}: {value:g} {unit} {what}; allowed: < {limit:.6g} {unit} ({why})")
+
+    def in_units(self, field: str, per_unit: float, unit: str) -> "DesignLimitError":
+        """The same error for ``field`` given in ``unit`` (``per_unit``: this error's unit per ``unit``)."""
+        return DesignLimitError(field, self.value / per_unit, self.limit / per_unit, unit, self.what, self.why)
+
+    def __reduce__(self):
+        return type(self), (self.field, self.value, self.limit, self.unit, self.what, self.why)
+
+
 def require(condition: bool, field: str, value: object, allowed: str) -> None:
     """Raise :class:`InputError` unless ``condition`` holds."""
     if not condition:

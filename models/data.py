@@ -7,8 +7,9 @@ gear pair, and a label table with one row per record. Columns used:
   ``torque_nm`` (load, N m; breakdowns only);
 - ``severity`` (pitted fraction, 0 = healthy), ``severity_class`` (name),
   ``severity_class_index`` (order of the classes), ``n_pitted_teeth`` and/or
-  ``teeth_class`` (``"0"``, ``"1"``, ``"2"``, ``"3+"``); all optional for
-  unlabelled records;
+  ``teeth_class`` (the classifiers' classes ``"0"``, ``"1"``, ``"2"``, ``"3+"``;
+  the count decides where both are given, :meth:`SignalSet.teeth_classes`); all
+  optional for unlabelled records;
 - ``mesh_cps`` (mesh frequency in cycles per sample), optional: overrides the
   value computed from the speed, for records whose sampling rate or tooth counts
   are unknown.
@@ -163,11 +164,30 @@ class SignalSet:
         return sorted(str(c) for c in lab["severity_class"].unique())
 
     def teeth_classes(self) -> np.ndarray:
-        """Pitted-teeth class (``"0"`` .. ``"3+"``) per record."""
-        if "teeth_class" in self.labels:
-            return self.labels["teeth_class"].astype(str).to_numpy(dtype=object)
-        require("n_pitted_teeth" in self.labels, "labels", list(self.labels.columns), "teeth_class or n_pitted_teeth")
-        return teeth_class_of(self.labels["n_pitted_teeth"])
+        """Pitted-teeth class per record in the classifiers' vocabulary :data:`TEETH_CLASSES` (``"0"`` .. ``"3+"``).
+
+        A record's count ``n_pitted_teeth``, where it has one, decides (:func:`teeth_class_of`): a dataset's own
+        teeth classes are the sweep's sampling strata (any ``"k"`` or ``"k+"``, e.g. ``"5"`` or ``"1+"``,
+        :mod:`datagen.class_grid`) and each record's count places it in the classifiers' classes. A record
+        without a count takes its ``teeth_class``, which must then be one of :data:`TEETH_CLASSES`.
+        """
+        lab = self.labels
+        require("teeth_class" in lab or "n_pitted_teeth" in lab, "labels", list(lab.columns),
+                "teeth_class or n_pitted_teeth")
+        n = (pd.to_numeric(lab["n_pitted_teeth"], errors="coerce").to_numpy(dtype=float) if "n_pitted_teeth" in lab
+             else np.full(len(lab), np.nan))
+        named = lab["teeth_class"].astype(str).to_numpy(dtype=object) if "teeth_class" in lab else None
+        out = np.empty(len(lab), dtype=object)
+        for i, k in enumerate(n):
+            if np.isfinite(k):
+                require(k >= 0 and k == int(k), "labels.n_pitted_teeth", k, "an integer >= 0")
+                out[i] = teeth_class_of([int(k)])[0]
+            else:
+                require(named is not None and named[i] in TEETH_CLASSES, "labels.teeth_class",
+                        None if named is None else named[i],
+                        f"one of: {', '.join(TEETH_CLASSES)} (or an n_pitted_teeth count)")
+                out[i] = named[i]
+        return out
 
     def as_binary(self) -> "SignalSet":
         """The same records with the classes ``healthy`` (severity 0) and ``damaged`` (anything else)."""

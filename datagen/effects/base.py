@@ -31,7 +31,7 @@ How to write an effect
 
 2. Every parameter field needs a default and ``metadata`` with ``"unit"`` (SI,
    ``"-"`` for dimensionless) and ``"bounds"`` ``(lo, hi)``: values outside
-   raise :class:`~gearpit.errors.InputError`, and the model-vs-measurement
+   (and, for a field annotated ``int``, values that are not integers) raise :class:`~gearpit.errors.InputError`, and the model-vs-measurement
    comparison fits the parameter within these bounds. A string option uses
    ``metadata={"unit": "-", "choices": ("a", "b")}`` instead of bounds.
 3. ``name`` is the key used in case files (``[[effects]] name = "runout"``)
@@ -234,6 +234,11 @@ class Effect:
                     raise InputError(where, v, f"one of: {', '.join(map(str, f.metadata['choices']))}")
                 continue
             lo, hi = f.metadata["bounds"]
+            if f.type in ("int", int):      # an integer field (a seed, a count) takes integers only
+                ok = isinstance(v, (int, np.integer)) and not isinstance(v, bool) and lo <= v <= hi
+                if not ok:
+                    raise InputError(where, v, f"an integer in [{lo}, {hi}]")
+                continue
             ok = isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and lo <= v <= hi
             if not ok:
                 raise InputError(where, v, f"a number in [{lo}, {hi}] {f.metadata.get('unit', '')}".rstrip())

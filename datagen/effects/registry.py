@@ -148,17 +148,21 @@ class EffectSpec:
 
     @classmethod
     def from_string(cls, text: str) -> "EffectSpec":
-        """From the CLI form ``name:key=value,key=value`` (values parsed as numbers when they can be)."""
+        """From the CLI form ``name:key=value,key=value`` (values parsed as numbers when they can be: ``1.5`` and
+        ``1e3`` as floats, ``3`` as an integer); a key given twice is refused, as in a TOML table."""
         name, _, rest = text.partition(":")
         d: dict[str, Any] = {"name": name.strip()}
         for item in filter(None, (s.strip() for s in rest.split(","))):
             key, eq, val = item.partition("=")
             if not eq:
                 raise InputError("effect", text, "name:key=value,key=value")
+            key = key.strip()
+            if key in d:        # as a TOML table refuses a key given twice
+                raise InputError(f"effect.{d['name']}.{key}", text, "each parameter given once")
             try:
-                d[key.strip()] = float(val) if any(c in val for c in ".eE") else int(val)
+                d[key] = float(val) if any(c in val for c in ".eE") else int(val)
             except ValueError:
-                d[key.strip()] = val.strip()
+                d[key] = val.strip()
         return cls.from_dict(d, where="effect")
 
     def build(self) -> Effect:

@@ -36,7 +36,7 @@ import numpy as np
 
 from datagen.effects.base import Effect, Fit, register
 from datagen.flank import PitMap
-from datagen.pits import DEFAULT_DEPTH_M
+from datagen.pits import DEFAULT_DEPTH_M, DEPTH_RANGE_M
 
 #: flank pixels (profile x face) of the pit when the case has no pit map on that gear (Case's default grid)
 GRID = (64, 64)
@@ -104,7 +104,7 @@ class ToothPit(Effect):
 
     severity: float = field(default=0.2, metadata={"unit": "-", "bounds": (0.0, 0.6)})
     gear: str = field(default="pinion", metadata={"unit": "-", "choices": ("pinion", "wheel")})
-    depth_m: float = field(default=DEFAULT_DEPTH_M, metadata={"unit": "m", "bounds": (1e-6, 5e-3)})
+    depth_m: float = field(default=DEFAULT_DEPTH_M, metadata={"unit": "m", "bounds": DEPTH_RANGE_M})
 
     def mesh_stiffness(self, stiffness, ctx):
         if self.severity <= 0:

@@ -10,7 +10,8 @@ import numpy as np
 from datagen.geometry import PRESETS, preset
 from datagen.pair_file import load_pair
 from datagen.pit_stiffness import PIT_MODELS
-from datagen.stiffness import mesh_stiffness
+from datagen.pitshapes import require_depth
+from datagen.stiffness import mesh_stiffness, require_n_slices, require_record_fits, resolve_n_slices
 from gearpit.atomic import atomic_path
 from gearpit.errors import InputError, require
 from gearpit.tomlio import check_keys, read_toml
@@ -26,7 +27,7 @@ def register(sub) -> None:
     p.add_argument("--mask", type=Path, help="pit mask PNG of one tooth (painted: white = pit, or 16-bit depth in um)")
     p.add_argument("--photo", type=Path, help="photo of a flank; the pit mask is extracted from it")
     p.add_argument("--tooth", type=int, default=0, help="tooth that --mask/--photo applies to (default 0)")
-    p.add_argument("--depth-mm", type=float, default=0.2, help="pit depth for --photo / binary --mask (mm)")
+    p.add_argument("--depth-mm", type=float, default=0.2, help="pit depth for --photo / binary --mask (mm, 0.001 .. 5)")
     p.add_argument("--gear", choices=["pinion", "wheel"], default="pinion", help="gear that carries the pits")
     p.add_argument("--grid", default="219x1000", help="flank grid ROWSxCOLS (profile x face), default 219x1000")
     p.add_argument("--positions-per-cycle", type=int, default=64)
@@ -56,7 +57,7 @@ def build_pits(args, pair):
     grid = pair.flank_grid(args.gear, rows, cols)
     require(0 <= args.tooth < pair._gear(args.gear).teeth, "--tooth", args.tooth,
             f"a tooth index in [0, {pair._gear(args.gear).teeth - 1}]")
-    require(args.depth_mm > 0, "--depth-mm", args.depth_mm, "a number > 0 (mm)")
+    require_depth("--depth-mm", args.depth_mm, "mm")
     if args.pits is not None:
         from datagen.pits import PitSpec
 
@@ -84,7 +85,14 @@ def write_stiffness_csv(ms, path: Path) -> None:
 
 def run(args: argparse.Namespace) -> int:
     pair = load_pair(args.pair) if args.pair else preset(args.preset)
+    if args.n_slices is not None:
+        require_n_slices(pair, args.n_slices, "--n-slices")
     pits = build_pits(args, pair)
+    require(args.positions_per_cycle >= 4, "--positions-per-cycle", args.positions_per_cycle, "an integer >= 4")
+    n_slices = resolve_n_slices(pair, () if pits is None else (pits,), args.n_slices)
+    require_record_fits(pair, args.positions_per_cycle, n_slices,
+                        None if pits is None else {pits.gear: len(pits.pitted_teeth)}, "--positions-per-cycle",
+                        records=1 if pits is None else 2)    # a pitted record is drawn beside the healthy one
     ms = mesh_stiffness(pair, pits=pits, positions_per_cycle=args.positions_per_cycle, n_slices=args.n_slices,
                         pit_model=args.pit_model)
     from datagen.stiffness_plot import plot_stiffness
