@@ -127,7 +127,7 @@ class Case:
         """The stiffness options against the pair and the pits, before any work: enough slices for a helical pair,
         and a record that fits :data:`datagen.stiffness.STIFFNESS_BUDGET_BYTES` to compute (pits drawn by an
         effect count as one more pitted tooth on its gear)."""
-        from datagen.stiffness import min_n_slices, require_n_slices, require_record_fits
+        from datagen.stiffness_limits import min_n_slices, require_n_slices, require_record_fits
 
         so = self.stiffness
         if so.n_slices is not None:

@@ -11,7 +11,8 @@ from datagen.geometry import PRESETS, preset
 from datagen.pair_file import load_pair
 from datagen.pit_stiffness import PIT_MODELS
 from datagen.pitshapes import require_depth
-from datagen.stiffness import mesh_stiffness, require_n_slices, require_record_fits, resolve_n_slices
+from datagen.stiffness import mesh_stiffness, resolve_n_slices
+from datagen.stiffness_limits import require_n_slices, require_record_fits
 from gearpit.atomic import atomic_path
 from gearpit.errors import InputError, require
 from gearpit.tomlio import check_keys, read_toml
