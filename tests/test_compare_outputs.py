@@ -1,0 +1,77 @@
+"""Output paths of ``gearpit compare`` (and of every command through :mod:`gearpit.atomic`), the model lock, the
+ledger's validation and the messages of ``--add`` / ``--candidates``.
+
+Reference: the auditor's reproductions (bad --json/--report paths, symbolic links, FIFOs, two runs at once, a
+ledger edited by hand, a fit taken from another recording). Comparisons here are short (1 s, no attribution).
+"""
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+import pytest
+
+from gearpit.atomic import atomic_path, atomic_set, check_output_path
+from gearpit.errors import InputError
+
+
+# ---------------------------------------------------------------------- gearpit.atomic
+def test_atomic_path_writes_through_a_symlink(tmp_path):
+    """A link stays a link; the file it points to gets the new content (written beside it, then renamed)."""
+    target = tmp_path / "sub" / "target.json"
+    target.parent.mkdir()
+    target.write_text("old")
+    link = tmp_path / "link.json"
+    link.symlink_to(target)
+    with atomic_path(link) as tmp:
+        assert tmp.parent == target.parent
+        tmp.write_text("new")
+    assert link.is_symlink() and os.readlink(link) == str(target)
+    assert target.read_text() == "new"
+    assert sorted(p.name for p in target.parent.iterdir()) == ["target.json"]
+
+
+def test_atomic_set_writes_through_a_symlink(tmp_path):
+    target = tmp_path / "t.csv"
+    target.write_text("old")
+    (tmp_path / "l.csv").symlink_to(target)
+    with atomic_set([tmp_path / "l.csv"]) as staged:
+        for p in staged.values():
+            p.write_text("new")
+    assert (tmp_path / "l.csv").is_symlink() and target.read_text() == "new"
+
+
+def test_atomic_path_refuses_a_fifo_and_a_directory(tmp_path):
+    fifo = tmp_path / "pipe.json"
+    os.mkfifo(fifo)
+    with pytest.raises(InputError, match="not a regular file"):
+        with atomic_path(fifo) as tmp:
+            tmp.write_text("x")
+    assert fifo.is_fifo()
+    (tmp_path / "d").mkdir()
+    with pytest.raises(InputError, match="a directory"):
+        with atomic_path(tmp_path / "d") as tmp:
+            tmp.write_text("x")
+    assert (tmp_path / "d").is_dir()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d", "pipe.json"]
+
+
+def test_a_device_is_refused_before_writing():
+    """Checked without writing (the old code, run as root, replaced the device with a plain file)."""
+    from gearpit.atomic import write_target
+
+    with pytest.raises(InputError, match="/dev/null.*not a regular file"):
+        write_target("/dev/null")
+
+
+def test_check_output_path(tmp_path):
+    (tmp_path / "f.toml").write_text("")
+    with pytest.raises(InputError, match=r"--json.*f\.toml is a file"):
+        check_output_path(tmp_path / "f.toml" / "o.json", "--json")
+    with pytest.raises(InputError, match=r"--report.*a directory"):
+        check_output_path(tmp_path, "--report")
+    with pytest.raises(InputError, match=r"--json.*input or ledger"):
+        check_output_path(tmp_path / "f.toml", "--json", inputs=[tmp_path / "f.toml"])
+    assert check_output_path(tmp_path / "new" / "o.json", "--json") == tmp_path / "new" / "o.json"
+    assert not (tmp_path / "new").exists()
