@@ -75,3 +75,73 @@ def test_check_output_path(tmp_path):
         check_output_path(tmp_path / "f.toml", "--json", inputs=[tmp_path / "f.toml"])
     assert check_output_path(tmp_path / "new" / "o.json", "--json") == tmp_path / "new" / "o.json"
     assert not (tmp_path / "new").exists()
+
+
+# ---------------------------------------------------------------------- gearpit compare: outputs checked first
+@pytest.fixture(scope="module")
+def rig_files(tmp_path_factory):
+    """A 1 s simulated rig (compare.synthetic) as rig.csv + rig.toml; each test copies it."""
+    from compare.synthetic import rig_measurement
+    from compare.workflow import write_rig_files
+
+    d = tmp_path_factory.mktemp("rig_src")
+    write_rig_files(rig_measurement(({"name": "pitch_error", "grade": 8.0},), duration_s=1.0), d)
+    return d
+
+
+@pytest.fixture
+def rig(rig_files, tmp_path):
+    import shutil
+
+    for name in ("rig.csv", "rig.toml"):
+        shutil.copy(rig_files / name, tmp_path / name)
+    return tmp_path
+
+
+def _compare(rig, *args):
+    from gearpit.cli import main
+
+    return main(["compare", str(rig / "rig.csv"), "--no-attribution", "--no-calibrate", *map(str, args)])
+
+
+def _state(rig):
+    return {p.name: p.read_bytes() for p in sorted(rig.iterdir()) if p.is_file()}
+
+
+@pytest.mark.parametrize("flag, where, allowed", [
+    ("--report", "report_dir", "a directory"),
+    ("--json", "report_dir", "a directory"),
+    ("--json", "rig.toml/o.json", "rig.toml is a file"),
+    ("--json", "rig.csv", "input or ledger"),
+    ("--report", "rig.toml", "input or ledger"),
+    ("--json", "rig.model.toml", "input or ledger"),
+    ("--json", "rig.model.ledger.jsonl", "input or ledger"),
+])
+def test_bad_output_path_is_refused_before_any_work(rig, capsys, flag, where, allowed):
+    """One stderr line naming the flag, the path and why; exit 2; the model, the ledger and every file as they
+    were (before: an IsADirectoryError traceback after the model and the ledger had been written)."""
+    (rig / "report_dir").mkdir()
+    before = _state(rig)
+    assert _compare(rig, "--add", "pitch_error:grade=8", flag, rig / where) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and flag in err[0] and where.split("/")[0] in err[0] and allowed in err[0]
+    assert _state(rig) == before and not (rig / "rig.model.toml").exists()
+
+
+def test_same_path_for_json_and_report_is_refused(rig, capsys):
+    assert _compare(rig, "--json", rig / "o.out", "--report", rig / "o.out") == 2
+    assert "--report" in capsys.readouterr().err and not (rig / "o.out").exists()
+
+
+def test_model_and_ledger_are_written_after_the_outputs(rig, monkeypatch):
+    """A failure while writing the JSON leaves the model and the ledger as they were."""
+    import compare.workflow as wf
+
+    def fail(doc, path):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(wf, "write_json", fail)
+    with pytest.raises(OSError, match="disk full"):
+        wf.run(rig / "rig.csv", add=["pitch_error:grade=8"], attribution=False, calibrate=False,
+               json_path=rig / "o.json")
+    assert not (rig / "rig.model.toml").exists() and not (rig / "rig.model.ledger.jsonl").exists()
