@@ -37,6 +37,7 @@ from compare.joint_refit import joint_refit_message
 from compare.ledger import append_row, last_candidate, ledger_path, make_row, read_ledger
 from compare.measurement import find_sidecar, load_measurement
 from compare.model import ComparisonModel, parse_add
+from compare.model_lock import lock_path, model_lock
 from compare.pair_check import check_pair, pair_message
 from compare.quality import clipping_message
 from compare.report import document, write_html, write_json
@@ -73,7 +74,7 @@ def check_outputs(measurement_path, meta, model_path: Path, *, report=None, json
     regular-file paths, none of them one of the run's own files (the measurement, its sidecar, the model, its
     ledger and settled model) nor both the same file."""
     m = Path(measurement_path)
-    inputs = [m, meta, model_path, ledger_path(model_path), settled_path(model_path)]
+    inputs = [m, meta, model_path, ledger_path(model_path), settled_path(model_path), lock_path(model_path)]
     if meta is None:   # the sidecar found beside the measurement (compare.measurement.find_sidecar)
         try:
             inputs.append(find_sidecar(m))
@@ -120,10 +121,19 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
         calibrate: bool | str | None = None, refit: bool | list[str] | None = None) -> Outcome:
     """The whole loop (module docstring); returns everything it computed. ``calibrate``: True, False or "auto"
     (None: as the model file says, default "auto")."""
-    messages: list[str] = []
     mpath = Path(model_path) if model_path is not None else default_model_path(measurement_path)
     check_outputs(measurement_path, meta, mpath, report=report, json_path=json_path)
     measurement = load_measurement(measurement_path, meta)
+    with model_lock(mpath):    # from reading the model and ledger to writing them (compare.model_lock)
+        return _run_locked(measurement, measurement_path, mpath, add=add, plugins=plugins, attribution=attribution,
+                           candidates=candidates, report=report, json_path=json_path, seed=seed, settings=settings,
+                           parallel=parallel, calibrate=calibrate, refit=refit)
+
+
+def _run_locked(measurement, measurement_path, mpath: Path, *, add, plugins, attribution, candidates, report,
+                json_path, seed, settings, parallel, calibrate, refit) -> Outcome:
+    """:func:`run` once the model's lock is held."""
+    messages: list[str] = []
     for p in plugins:
         added = load_plugin(p)
         messages.append(f"plugin {p}: registered {', '.join(added) or 'nothing new'}")

@@ -145,3 +145,61 @@ def test_model_and_ledger_are_written_after_the_outputs(rig, monkeypatch):
         wf.run(rig / "rig.csv", add=["pitch_error:grade=8"], attribution=False, calibrate=False,
                json_path=rig / "o.json")
     assert not (rig / "rig.model.toml").exists() and not (rig / "rig.model.ledger.jsonl").exists()
+
+
+# ---------------------------------------------------------------------- one comparison at a time per model
+def _hold_lock(model_path):
+    import fcntl
+
+    from compare.model_lock import lock_path
+
+    fh = open(lock_path(model_path), "a+")
+    fcntl.flock(fh, fcntl.LOCK_EX)
+    return fh
+
+
+def test_a_second_run_waits_and_reads_the_ledger_after_the_first(rig, capsys):
+    """While another run holds the model's lock and appends its row, this run waits (says so on stderr), then
+    reads the ledger and the model as the other left them: its row is run 2 and both effects are in the model
+    (before: both rows "run": 1 and one --add lost)."""
+    import threading
+
+    from compare.ledger import read_ledger
+    from compare.model import ComparisonModel
+    from compare.workflow import run
+    from datagen.effects import EffectSpec
+
+    model = rig / "rig.model.toml"
+    holder = _hold_lock(model)
+
+    def other_run():       # what the first comparison writes while it holds the lock
+        import time
+
+        time.sleep(0.5)
+        ComparisonModel().with_effect(EffectSpec.from_dict({"name": "eccentricity_pinion"}).build()).save(model)
+        (rig / "rig.model.ledger.jsonl").write_text(json.dumps({"run": 1, "model": "x", "error_db": {"total": 1.0},
+                                                                 "candidates": []}) + "\n")
+        holder.close()
+
+    t = threading.Thread(target=other_run)
+    t.start()
+    out = run(rig / "rig.csv", add=["pitch_error:grade=8"], attribution=False, calibrate=False)
+    t.join()
+    assert "waiting for rig.model.toml.lock" in capsys.readouterr().err
+    assert [r["run"] for r in read_ledger(rig / "rig.model.ledger.jsonl")] == [1, 2]
+    assert ComparisonModel.load(model).effect_names == ("eccentricity_pinion", "pitch_error")
+    assert out.ledger[-1]["run"] == 2
+
+
+def test_a_run_gives_up_after_the_lock_wait(rig, monkeypatch, capsys):
+    import compare.model_lock as ml
+
+    monkeypatch.setattr(ml, "LOCK_WAIT_S", 0.3)
+    holder = _hold_lock(rig / "rig.model.toml")
+    try:
+        assert _compare(rig, "--add", "pitch_error:grade=8") == 2
+    finally:
+        holder.close()
+    err = capsys.readouterr().err.strip().splitlines()
+    assert "--model" in err[-1] and "rig.model.toml.lock" in err[-1] and "0.3 s" in err[-1]
+    assert not (rig / "rig.model.toml").exists() and not (rig / "rig.model.ledger.jsonl").exists()
