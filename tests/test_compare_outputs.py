@@ -105,7 +105,8 @@ def _compare(rig, *args):
 
 
 def _state(rig):
-    return {p.name: p.read_bytes() for p in sorted(rig.iterdir()) if p.is_file()}
+    """Every file's bytes, but the model's lock file (left in place by design: compare.model_lock)."""
+    return {p.name: p.read_bytes() for p in sorted(rig.iterdir()) if p.is_file() and p.suffix != ".lock"}
 
 
 @pytest.mark.parametrize("flag, where, allowed", [
@@ -203,3 +204,75 @@ def test_a_run_gives_up_after_the_lock_wait(rig, monkeypatch, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert "--model" in err[-1] and "rig.model.toml.lock" in err[-1] and "0.3 s" in err[-1]
     assert not (rig / "rig.model.toml").exists() and not (rig / "rig.model.ledger.jsonl").exists()
+
+
+# ---------------------------------------------------------------------- the ledger, validated when read
+_ROW = {"run": 1, "time_utc": "2026-01-01T00:00:00Z", "measurement": "rig.csv", "measurement_sha256": None,
+        "model": "baseline", "effects": [], "speed_rpm": 1000.0, "gain_db": 12.0,
+        "error_db": {"order": 7.7, "total": 9.3}, "raw_error_db": {"total": 9.4}, "noise_error_db": {"total": 0.5},
+        "claimed": None, "candidates": [{"effect": "pitch_error", "params": {"grade": 8.0}, "reduction": 0.9,
+                                         "error_db": 0.8, "nuisance": None}], "calibration": None}
+
+
+@pytest.mark.parametrize("line, field, allowed", [
+    ('{"error_db": 5.0}', "run", "an integer"),
+    (json.dumps({**_ROW, "error_db": 5.0}), "error_db", "an object"),
+    ("{}", "run", "an integer"),
+    ("[1, 2, 3]", "row", "a JSON object"),
+    (json.dumps({**_ROW, "error_db": {"total": "9.3"}}), "error_db.total", "a finite number or null"),
+    (json.dumps({**_ROW, "error_db": {"total": float("nan")}}), "error_db.total", "a finite number or null"),
+    (json.dumps({**_ROW, "error_db": {"order": 1.0}}), "error_db.total", "missing"),
+    (json.dumps({**_ROW, "candidates": [{"effect": "pitch_error", "params": "grade=8"}]}), "candidates[0].params",
+     "an object"),
+    (json.dumps({**_ROW, "candidates": ["pitch_error"]}), "candidates[0]", "an object"),
+], ids=["no_run", "error_not_object", "empty", "array", "str_total", "nan_total", "no_total", "str_params",
+        "str_candidate"])
+def test_a_bad_ledger_row_names_file_line_and_field(tmp_path, line, field, allowed):
+    from compare.ledger import read_ledger
+
+    led = tmp_path / "m.ledger.jsonl"
+    led.write_text(json.dumps(_ROW) + "\n" + line + "\n")
+    with pytest.raises(InputError) as exc:
+        read_ledger(led)
+    msg = str(exc.value)
+    assert f"{led}: line 2: {field}:" in msg and allowed in msg and "\n" not in msg
+
+
+def test_a_bad_ledger_stops_the_run_before_any_work(rig, capsys):
+    """Exit 2, one line; no row added, the model not written (before: a traceback after the row was added)."""
+    led = rig / "rig.model.ledger.jsonl"
+    led.write_text(json.dumps({**_ROW, "error_db": {"total": "9.3"}}) + "\n")
+    before = _state(rig)
+    assert _compare(rig, "--add", "pitch_error", "--json", rig / "o.json") == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "line 1: error_db.total" in err[0]
+    assert _state(rig) == before
+
+
+def test_the_ledger_writer_writes_null_not_nan(tmp_path):
+    from compare.ledger import append_row, history_table, read_ledger
+
+    led = tmp_path / "l.jsonl"
+    append_row(led, {**_ROW, "error_db": {"order": float("nan"), "total": np.float64(np.inf)},
+                     "gain_db": np.float64("nan")})
+    text = led.read_text()
+    assert "NaN" not in text and "Infinity" not in text
+    row = read_ledger(led)[0]
+    assert row["error_db"] == {"order": None, "total": None} and row["gain_db"] is None
+    assert history_table([row]).splitlines()[1].split()[:3] == ["1", "-", "-"]
+
+
+def test_null_errors_in_the_ledger_reach_the_json_and_report(rig):
+    """A row with null errors (a NaN written by the old code, now null) does not break a later --json / --report
+    run: the document validates against the schema (before: "Out of range float values are not JSON
+    compliant" on every later run)."""
+    jsonschema = pytest.importorskip("jsonschema")
+    from compare.schema import SCHEMA
+    from compare.workflow import run
+
+    (rig / "rig.model.ledger.jsonl").write_text(json.dumps({**_ROW, "error_db": {"order": None, "total": None}})
+                                                 + "\n")
+    run(rig / "rig.csv", attribution=False, calibrate=False, json_path=rig / "o.json", report=rig / "o.html")
+    doc = json.loads((rig / "o.json").read_text())
+    jsonschema.validate(doc, SCHEMA)
+    assert [r["error_db"]["total"] is None for r in doc["ledger"]] == [True, False]
