@@ -172,11 +172,38 @@ def _jsonable(v):
 def last_candidate(rows: list[dict], effect: str) -> dict | None:
     """The latest ledger entry of candidate ``effect`` with fitted parameters (``params``, and ``nuisance``:
     the drive-train values they were fitted with, in calibrated runs)."""
+    found = last_fit(rows, effect)
+    return None if found is None else found[1]
+
+
+def last_fit(rows: list[dict], effect: str) -> tuple[dict, dict] | None:
+    """The row and the candidate entry of :func:`last_candidate`: the row says which run, measurement
+    (``measurement``, ``measurement_sha256``) and model the fit was made with."""
     for row in reversed(rows):
         for c in row.get("candidates", []):
             if c.get("effect") == effect and c.get("params") is not None:
-                return c
+                return row, c
     return None
+
+
+def fit_provenance_warnings(row: dict, *, measurement_path: str | Path | None, model_description: str) -> list[str]:
+    """Why a fit taken from ledger ``row`` may not fit this comparison: it was made on another measurement (by
+    content digest when the row has one, else by path) or against another model (its effects)."""
+    out = []
+    if measurement_path is not None:
+        sha = row.get("measurement_sha256")
+        if sha is not None and Path(measurement_path).is_file():
+            other = sha != file_sha256(measurement_path)
+        else:
+            other = row.get("measurement") is not None and (
+                os.path.realpath(row["measurement"]) != os.path.realpath(measurement_path))
+        if other:
+            out.append(f"warning: run {row['run']} fitted it on another measurement ({row.get('measurement')}"
+                       + (", other content" if sha is not None else "") + f") than {measurement_path}")
+    if row.get("model") != model_description:
+        out.append(f"warning: run {row['run']} fitted it against another model ({row.get('model')}) than this "
+                   f"one ({model_description})")
+    return out
 
 
 

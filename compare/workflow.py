@@ -34,7 +34,7 @@ from compare.channels import resolution_message
 from compare.comparison import Comparison, below_shafts_message, prepare_reference
 from compare.escalation import compare_and_attribute, reason_text
 from compare.joint_refit import joint_refit_message
-from compare.ledger import append_row, last_candidate, ledger_path, make_row, read_ledger
+from compare.ledger import append_row, fit_provenance_warnings, last_fit, ledger_path, make_row, read_ledger
 from compare.measurement import find_sidecar, load_measurement
 from compare.model import ComparisonModel, parse_add
 from compare.model_lock import lock_path, model_lock
@@ -91,17 +91,24 @@ def check_outputs(measurement_path, meta, model_path: Path, *, report=None, json
         seen[os.path.realpath(target)] = flag
 
 
-def extend_model(model: ComparisonModel, add: list[str], rows: list[dict], messages: list) -> ComparisonModel:
-    """Apply ``--add`` items (module docstring)."""
+def extend_model(model: ComparisonModel, add: list[str], rows: list[dict], messages: list, *,
+                 measurement_path: str | Path | None = None) -> ComparisonModel:
+    """Apply ``--add`` items (module docstring). A fit taken from the ledger is named by its run and
+    measurement, with a warning when that run's measurement or model differ from this comparison's."""
+    as_loaded = model.describe()
     for item in add:
         name, params = parse_add(item)
         if params is None:
-            fitted = last_candidate(rows, name)
+            found = last_fit(rows, name)
             cls = get(name)
-            if fitted is not None:
+            if found is not None:
+                row, fitted = found
                 allowed = {k: v for k, v in fitted["params"].items() if k in {f for f in cls().params()}}
                 params = allowed
-                messages.append(f"added {name} with the parameters fitted by the last comparison: {params}")
+                messages.append(f"added {name} with the parameters fitted by run {row['run']} of the ledger (on "
+                                f"{row.get('measurement')}, model {row.get('model')}): {params}")
+                messages += fit_provenance_warnings(row, measurement_path=measurement_path,
+                                                    model_description=as_loaded)
                 if fitted.get("nuisance"):   # fitted jointly with the calibrated nuisances: keep them together
                     model = model.with_drivetrain(fitted["nuisance"])
                     messages.append(f"drive train set to the nuisances it was fitted with: {fitted['nuisance']}")
@@ -144,7 +151,7 @@ def _run_locked(measurement, measurement_path, mpath: Path, *, add, plugins, att
     lpath = ledger_path(mpath)
     rows = read_ledger(lpath)
     changed = bool(add) or bool(plugins) or not mpath.exists()
-    model = extend_model(model, list(add), rows, messages)
+    model = extend_model(model, list(add), rows, messages, measurement_path=measurement_path)
     if candidates is not None:
         for c in candidates:
             get(c)

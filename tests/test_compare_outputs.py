@@ -276,3 +276,37 @@ def test_null_errors_in_the_ledger_reach_the_json_and_report(rig):
     doc = json.loads((rig / "o.json").read_text())
     jsonschema.validate(doc, SCHEMA)
     assert [r["error_db"]["total"] is None for r in doc["ledger"]] == [True, False]
+
+
+# ---------------------------------------------------------------------- --add EFFECT: whose fit
+def _ledger_with_fit(rig, measurement="rig.csv", sha=None, model="baseline"):
+    from compare.ledger import file_sha256
+
+    rows = [{**_ROW, "measurement": str(rig / measurement),
+             "measurement_sha256": sha if sha is not None else file_sha256(rig / "rig.csv"), "model": model},
+            {**_ROW, "run": 2, "measurement": str(rig / "rig.csv"), "candidates": []}]
+    (rig / "rig.model.ledger.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
+
+
+def test_add_names_the_run_and_measurement_of_the_fit(rig):
+    """The fit of run 1 on this measurement and model: named by run, no warning (before: "the last
+    comparison", though run 2 fitted nothing)."""
+    from compare.workflow import run
+
+    _ledger_with_fit(rig)
+    out = run(rig / "rig.csv", add=["pitch_error"], attribution=False, calibrate=False)
+    msg = [m for m in out.messages if m.startswith("added pitch_error")]
+    assert msg == [f"added pitch_error with the parameters fitted by run 1 of the ledger (on {rig / 'rig.csv'}, "
+                   "model baseline): {'grade': 8.0}"]
+    assert not [m for m in out.messages if m.startswith("warning")]
+
+
+def test_add_warns_when_the_fit_is_from_another_measurement_or_model(rig):
+    from compare.workflow import run
+
+    _ledger_with_fit(rig, measurement="pitted.csv", sha="0" * 64, model="tip_relief(x=1)")
+    out = run(rig / "rig.csv", add=["pitch_error"], attribution=False, calibrate=False)
+    warn = [m for m in out.messages if m.startswith("warning")]
+    assert len(warn) == 2
+    assert "run 1" in warn[0] and "another measurement" in warn[0] and "pitted.csv" in warn[0]
+    assert "run 1" in warn[1] and "another model (tip_relief(x=1))" in warn[1] and "(baseline)" in warn[1]
