@@ -129,9 +129,13 @@ def residual_map(comparison) -> bytes:
 def ledger_history(rows: list[dict]) -> bytes:
     fig, ax = plt.subplots(figsize=(8, 3))
     runs = [r.get("run", i + 1) for i, r in enumerate(rows)]
-    ax.plot(runs, [r["error_db"]["total"] for r in rows], "o-", color="k", label="total")
+    def db(r, key):     # null in the ledger (no finite value): a gap in the line
+        v = r["error_db"].get(key)
+        return np.nan if v is None else v
+
+    ax.plot(runs, [db(r, "total") for r in rows], "o-", color="k", label="total")
     for view in VIEWS:
-        ax.plot(runs, [r["error_db"].get(view, np.nan) for r in rows], ".--", lw=0.7, label=view)
+        ax.plot(runs, [db(r, view) for r in rows], ".--", lw=0.7, label=view)
     ax.set_xlabel("run")
     ax.set_ylabel("error (dB)")
     ax.set_title("ledger: error per comparison")

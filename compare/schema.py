@@ -199,6 +199,8 @@ SCHEMA = {
         "ledger": {"type": "array",
                    "items": {"type": "object", "required": ["run", "model", "error_db"],
                              "properties": {"run": {"type": "integer"}, "model": {"type": "string"},
-                                            "error_db": ERRORS}}},
+                                            "error_db": {"type": "object", "required": ["total"],
+                                                         "additionalProperties": {"type": ["number", "null"]},
+                                                         "description": "null: no finite value (compare.ledger)"}}}},
     },
 }

@@ -25,6 +25,7 @@ Used by ``gearpit compare`` and by ``experiments/compare_walkthrough.py``.
 """
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -33,9 +34,10 @@ from compare.channels import resolution_message
 from compare.comparison import Comparison, below_shafts_message, prepare_reference
 from compare.escalation import compare_and_attribute, reason_text
 from compare.joint_refit import joint_refit_message
-from compare.ledger import append_row, last_candidate, ledger_path, make_row, read_ledger
-from compare.measurement import load_measurement
+from compare.ledger import append_row, fit_provenance_warnings, last_fit, ledger_path, make_row, read_ledger
+from compare.measurement import find_sidecar, load_measurement
 from compare.model import ComparisonModel, parse_add
+from compare.model_lock import lock_path, model_lock
 from compare.pair_check import check_pair, pair_message
 from compare.quality import clipping_message
 from compare.report import document, write_html, write_json
@@ -43,6 +45,8 @@ from compare.response import attach_responses
 from compare.sideband_fit import sideband_fit_message
 from compare.speed import speed_message
 from datagen.effects import EffectSpec, get, load_plugin
+from gearpit.atomic import check_output_path
+from gearpit.errors import InputError
 
 
 @dataclass
@@ -60,17 +64,51 @@ def default_model_path(measurement_path: str | Path) -> Path:
     return p.with_name(p.stem + ".model.toml")
 
 
-def extend_model(model: ComparisonModel, add: list[str], rows: list[dict], messages: list) -> ComparisonModel:
-    """Apply ``--add`` items (module docstring)."""
+def settled_path(model_path: Path) -> Path:
+    """Where the settled model of a calibrated pass goes: ``<model stem>.settled.toml``."""
+    return model_path.with_name(model_path.stem + ".settled" + model_path.suffix)
+
+
+def check_outputs(measurement_path, meta, model_path: Path, *, report=None, json_path=None) -> None:
+    """Check ``--report`` and ``--json`` before any work (:func:`gearpit.atomic.check_output_path`): writable
+    regular-file paths, none of them one of the run's own files (the measurement, its sidecar, the model, its
+    ledger and settled model) nor both the same file."""
+    m = Path(measurement_path)
+    inputs = [m, meta, model_path, ledger_path(model_path), settled_path(model_path), lock_path(model_path)]
+    if meta is None:   # the sidecar found beside the measurement (compare.measurement.find_sidecar)
+        try:
+            inputs.append(find_sidecar(m))
+        except InputError:
+            pass
+    seen = {}
+    for flag, out in (("--json", json_path), ("--report", report)):
+        if out is None:
+            continue
+        target = check_output_path(out, flag, inputs=inputs)
+        other = seen.get(os.path.realpath(target))
+        if other is not None:
+            raise InputError(flag, str(out), f"a file other than the {other} output")
+        seen[os.path.realpath(target)] = flag
+
+
+def extend_model(model: ComparisonModel, add: list[str], rows: list[dict], messages: list, *,
+                 measurement_path: str | Path | None = None) -> ComparisonModel:
+    """Apply ``--add`` items (module docstring). A fit taken from the ledger is named by its run and
+    measurement, with a warning when that run's measurement or model differ from this comparison's."""
+    as_loaded = model.describe()
     for item in add:
         name, params = parse_add(item)
         if params is None:
-            fitted = last_candidate(rows, name)
+            found = last_fit(rows, name)
             cls = get(name)
-            if fitted is not None:
+            if found is not None:
+                row, fitted = found
                 allowed = {k: v for k, v in fitted["params"].items() if k in {f for f in cls().params()}}
                 params = allowed
-                messages.append(f"added {name} with the parameters fitted by the last comparison: {params}")
+                messages.append(f"added {name} with the parameters fitted by run {row['run']} of the ledger (on "
+                                f"{row.get('measurement')}, model {row.get('model')}): {params}")
+                messages += fit_provenance_warnings(row, measurement_path=measurement_path,
+                                                    model_description=as_loaded)
                 if fitted.get("nuisance"):   # fitted jointly with the calibrated nuisances: keep them together
                     model = model.with_drivetrain(fitted["nuisance"])
                     messages.append(f"drive train set to the nuisances it was fitted with: {fitted['nuisance']}")
@@ -90,9 +128,19 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
         calibrate: bool | str | None = None, refit: bool | list[str] | None = None) -> Outcome:
     """The whole loop (module docstring); returns everything it computed. ``calibrate``: True, False or "auto"
     (None: as the model file says, default "auto")."""
-    messages: list[str] = []
-    measurement = load_measurement(measurement_path, meta)
     mpath = Path(model_path) if model_path is not None else default_model_path(measurement_path)
+    check_outputs(measurement_path, meta, mpath, report=report, json_path=json_path)
+    measurement = load_measurement(measurement_path, meta)
+    with model_lock(mpath):    # from reading the model and ledger to writing them (compare.model_lock)
+        return _run_locked(measurement, measurement_path, mpath, add=add, plugins=plugins, attribution=attribution,
+                           candidates=candidates, report=report, json_path=json_path, seed=seed, settings=settings,
+                           parallel=parallel, calibrate=calibrate, refit=refit)
+
+
+def _run_locked(measurement, measurement_path, mpath: Path, *, add, plugins, attribution, candidates, report,
+                json_path, seed, settings, parallel, calibrate, refit) -> Outcome:
+    """:func:`run` once the model's lock is held."""
+    messages: list[str] = []
     for p in plugins:
         added = load_plugin(p)
         messages.append(f"plugin {p}: registered {', '.join(added) or 'nothing new'}")
@@ -103,7 +151,7 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
     lpath = ledger_path(mpath)
     rows = read_ledger(lpath)
     changed = bool(add) or bool(plugins) or not mpath.exists()
-    model = extend_model(model, list(add), rows, messages)
+    model = extend_model(model, list(add), rows, messages, measurement_path=measurement_path)
     if candidates is not None:
         for c in candidates:
             get(c)
@@ -131,9 +179,6 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
                                      parallel=parallel)
         messages += [refit_message(r) for r in notes]
         changed = changed or any(r["kept"] for r in notes)
-    if changed:
-        model.save(mpath)
-        messages.append(f"model written: {mpath}")
     staged = compare_and_attribute(measurement, model, reference=ref, calibrate=calibrate, attribution=attribution,
                                    candidates=candidates, settings=settings or AttributionSettings(seed=seed),
                                    seed=seed, parallel=parallel)
@@ -142,27 +187,29 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
         attach_responses(att.candidates, comparison.model, measurement.pair, speed_rpm=ref.speed.speed_rpm,
                          torque_nm=measurement.torque_nm, reference=ref)
     escalation = staged.summary()
+    new_rows: list[dict] = []      # appended to the ledger last, once the outputs are written
     if staged.escalated:
         messages.append(f"model as written: error {escalation['as_written_error_db']:.2f} dB; "
                         + reason_text(escalation) + ", so the drive-train nuisances were calibrated and the "
                         "attribution repeated")
         row = make_row(*staged.as_written, run=len(rows) + 1, measurement_path=str(measurement_path))
-        append_row(lpath, row)
         rows = rows + [row]
+        new_rows.append(row)
     rej = escalation.get("calibration_rejected")
     if rej is not None:
         messages.append(reason_text(escalation) + ", so the drive-train "
                         "nuisances were calibrated and the attribution repeated, but that pass ended higher ("
                         f"{rej['error_db']:.2f} dB with " + (rej.get("claimed") or "no claim")
                         + f", against {rej['as_written_error_db']:.2f} dB as written); the model as written is kept")
+    settled_model = None
     if staged.settled:
         from compare.refit import refit_message
 
         messages += ["the calibrated pass claims nothing more; at its drive train " + refit_message(n)
                      for n in staged.settled]
         if staged.settled_model is not None:
-            spath = mpath.with_name(mpath.stem + ".settled" + mpath.suffix)
-            staged.settled_model.save(spath)
+            spath = settled_path(mpath)
+            settled_model = staged.settled_model
             messages.append(f"settled model written: {spath} (the calibrated drive train and the kept refits; "
                             f"compare with --model {spath} to take it)")
     cal = comparison.calibration
@@ -200,8 +247,8 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
     if att is not None and att.claimed and get(att.claimed[0].effect).mesh_harmonics_only:
         messages.append(mesh_shape_caveat(att.claimed[0].effect))
     row = make_row(comparison, att, run=len(rows) + 1, measurement_path=str(measurement_path))
-    append_row(lpath, row)
     rows = rows + [row]
+    new_rows.append(row)
     doc = document(comparison, att, rows, measurement_path=str(measurement_path), model_path=str(mpath),
                    escalation=escalation, pair_check=pair_check)
     if json_path is not None:
@@ -210,6 +257,14 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
     if report is not None:
         write_html(comparison, doc, report)
         messages.append(f"report written: {report}")
+    # the model and the ledger last: a run that fails before here leaves both as they were
+    if settled_model is not None:
+        settled_model.save(settled_path(mpath))
+    if changed:
+        model.save(mpath)
+        messages.append(f"model written: {mpath}")
+    for r in new_rows:
+        append_row(lpath, r)
     return Outcome(comparison=comparison, attribution=att, ledger=rows, model_path=mpath, messages=messages,
                    document=doc)
 
