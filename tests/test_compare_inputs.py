@@ -1,0 +1,102 @@
+"""Input checks of ``gearpit compare``: plugin files, sidecars and the sidecar template (refused by name, before
+any work, nothing written). Analytic tier: each test states the message it expects; none runs a comparison."""
+from __future__ import annotations
+
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from gearpit.errors import InputError
+
+EFFECT_PLUGIN = textwrap.dedent('''
+    from dataclasses import dataclass, field
+    import numpy as np
+    from datagen.effects import Effect, register
+
+    @register
+    @dataclass(frozen=True)
+    class InputsRunout(Effect):
+        name = "inputs_runout"
+        signature = "wheel order 1"
+        amplitude_m: float = field(default=5e-6, metadata={"unit": "m", "bounds": (0.0, 50e-6)})
+
+        def deviation_period_cycles(self, ctx):
+            return ctx.pair.wheel.teeth
+
+        def angle_deviation_m(self, th1, th2, ctx):
+            return self.amplitude_m * np.sin(th2)
+''')
+
+
+# ---------------------------------------------------------------------- plugins
+@pytest.mark.parametrize("body, message", [
+    ("x = 1\ndef broken(:\n    pass\n", r"^plugin syntax\.py: line 2: invalid syntax$"),
+    ("x = 1\nraise RuntimeError('boom at import')\n",
+     r"^plugin syntax\.py: raised RuntimeError: boom at import while loading$"),
+    ("import not_a_real_module_xyz\n",
+     r"^plugin syntax\.py: raised ModuleNotFoundError: No module named 'not_a_real_module_xyz' while loading$"),
+])
+def test_plugin_that_fails_to_import_is_one_line_naming_file(tmp_path, body, message):
+    from datagen.effects import load_plugin
+
+    (tmp_path / "syntax.py").write_text(body)
+    with pytest.raises(InputError, match=message):
+        load_plugin(tmp_path / "syntax.py")
+
+
+def test_plugin_failing_after_register_leaves_registry_clean(tmp_path):
+    from datagen.effects import load_plugin, names
+
+    (tmp_path / "half.py").write_text(EFFECT_PLUGIN + "\nraise RuntimeError('late')\n")
+    with pytest.raises(InputError, match="plugin half.py: raised RuntimeError: late"):
+        load_plugin(tmp_path / "half.py")
+    assert "inputs_runout" not in names()
+
+
+def test_plugin_registering_no_effect_is_refused(tmp_path):
+    from datagen.effects import load_plugin
+
+    (tmp_path / "noeffect.py").write_text("x = 1\n")
+    with pytest.raises(InputError, match=r"plugin noeffect\.py.*registers no effect: decorate an Effect subclass "
+                                         r"with @register"):
+        load_plugin(tmp_path / "noeffect.py")
+
+
+def test_plugin_loaded_twice_is_not_refused_as_empty(tmp_path):
+    """Loading the same file again (the CLI's --plugin, then the model's plugins list) registers the same class."""
+    from datagen.effects.registry import load_plugin, unregister
+
+    (tmp_path / "mine.py").write_text(EFFECT_PLUGIN)
+    try:
+        assert load_plugin(tmp_path / "mine.py") == ["inputs_runout"]
+        assert load_plugin(tmp_path / "mine.py") == []
+    finally:
+        unregister("inputs_runout")
+
+
+def test_model_stores_plugin_relative_to_its_folder(tmp_path):
+    """A plugin under the model's folder is written relative to the model file, so the folder can move."""
+    import shutil
+
+    from compare.model import ComparisonModel
+    from datagen.effects.registry import unregister
+
+    rig = tmp_path / "rig"
+    (rig / "fx").mkdir(parents=True)
+    (rig / "fx" / "mine.py").write_text(EFFECT_PLUGIN)
+    outside = tmp_path / "outside.py"
+    outside.write_text(EFFECT_PLUGIN.replace("inputs_runout", "inputs_runout2").replace("InputsRunout", "R2"))
+    try:
+        m = ComparisonModel.load(rig / "rig.model.toml")
+        m = m.with_plugin(str((rig / "fx" / "mine.py").resolve())).with_plugin(str(outside.resolve()))
+        m = m.with_plugin(str((rig / "fx" / "mine.py").resolve()))      # once only
+        assert m.plugins == ("fx/mine.py", str(outside.resolve()))
+        m.save()
+        shutil.move(str(rig), str(tmp_path / "moved"))
+        back = ComparisonModel.load(tmp_path / "moved" / "rig.model.toml")
+        assert back.plugins == ("fx/mine.py", str(outside.resolve()))
+        assert back.with_plugin(str((tmp_path / "moved" / "fx" / "mine.py").resolve())).plugins == back.plugins
+    finally:
+        unregister("inputs_runout")
+        unregister("inputs_runout2")
