@@ -60,6 +60,9 @@ SIDECAR_KEYS = ("fs_hz", "speed_rpm", "torque_nm", "pair", "sensor", "sensor_qua
                 "secondary", "reference")
 SIDECAR_SUFFIXES = (".toml", ".json", ".meta.toml", ".meta.json")
 MIN_REVOLUTIONS = 2.0
+#: keys that mark a JSON file as the metadata ``gearpit simulate`` writes beside its record
+#: (:attr:`datagen.simulate.Signals.metadata`), which is never a sidecar
+SIMULATE_METADATA_KEYS = frozenset({"case", "software_version", "mesh_frequency_hz"})
 #: sidecar ``sensor_quantity`` -> times the record is differentiated to read it as acceleration
 SENSOR_QUANTITIES = {"acceleration": 0, "velocity": 1, "displacement": 2}
 
@@ -187,20 +190,43 @@ def read_sidecar(path: str | Path) -> Sidecar:
             raise InputError("sidecar", str(p), f"a readable JSON file ({exc.strerror})") from None
         except json.JSONDecodeError as exc:
             raise InputError("sidecar", str(p), f"valid JSON ({exc})") from None
+        require(not is_simulate_metadata(d), "sidecar", str(p), "a sidecar (this is gearpit simulate's metadata, "
+                "not a sidecar: write one with fs_hz, speed_rpm, torque_nm, pair, sensor)")
     else:
         d = read_toml(p)
     return Sidecar.from_dict(d, where=p.name)
 
 
+def is_simulate_metadata(d) -> bool:
+    """Whether a parsed JSON file is ``gearpit simulate``'s metadata (:data:`SIMULATE_METADATA_KEYS`)."""
+    return isinstance(d, dict) and SIMULATE_METADATA_KEYS <= set(d)
+
+
+def _is_simulate_metadata_file(path: Path) -> bool:
+    if path.suffix.lower() != ".json":
+        return False
+    try:
+        return is_simulate_metadata(json.loads(path.read_text(encoding="utf-8")))
+    except (OSError, ValueError):       # unreadable or not JSON: read_sidecar says why
+        return False
+
+
 def find_sidecar(measurement_path: str | Path) -> Path:
-    """The sidecar beside a measurement: same stem with one of :data:`SIDECAR_SUFFIXES`."""
+    """The sidecar beside a measurement: same stem with one of :data:`SIDECAR_SUFFIXES`. A JSON file that is
+    ``gearpit simulate``'s metadata (the ``case.json`` beside ``case.csv``) is passed over, and the error when no
+    sidecar is found says so."""
     p = Path(measurement_path)
     candidates = [p.with_name(p.stem + s) for s in SIDECAR_SUFFIXES] + [p.with_name(p.name + s) for s in (".toml", ".json")]
+    skipped = []
     for c in candidates:
         if c.is_file() and c != p:
+            if _is_simulate_metadata_file(c):
+                skipped.append(c.name)
+                continue
             return c
+    note = "".join(f"; {name} beside it is gearpit simulate's metadata, not a sidecar" for name in skipped)
     raise InputError("--meta", None, "a sidecar (JSON/TOML) given with --meta or found beside the file as "
-                     + " or ".join(c.name for c in candidates[:2]))
+                     + " or ".join(c.name for c in candidates[:2]) + note)
 
 
 @dataclass(frozen=True, eq=False)

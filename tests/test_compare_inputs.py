@@ -100,3 +100,64 @@ def test_model_stores_plugin_relative_to_its_folder(tmp_path):
     finally:
         unregister("inputs_runout")
         unregister("inputs_runout2")
+
+
+# ---------------------------------------------------------------------- sidecars
+SIM_META = {"case": {"duration_s": 1.0, "fs_hz": 20000.0,
+                     "pair": {"name": "spur-gds", "module_n_mm": 2.0, "pressure_angle_n_deg": 20.0,
+                              "pinion": {"teeth": 29, "face_width_mm": 20.0}, "wheel": {"teeth": 100}},
+                     "operating": {"speed_rpm": 1500.0, "torque_nm": 11.3}},
+            "seed": 7, "software_version": "0.1.0", "solver": {"method": "x"}, "dofs": ["a", "b"],
+            "mesh_frequency_hz": 725.0, "shaft_frequency_pinion_hz": 25.0, "shaft_frequency_wheel_hz": 7.25,
+            "mean_mesh_stiffness_n_per_m": 3.7e8, "warnings": []}
+
+
+def _record(folder: Path, name: str = "case.csv", seconds: float = 2.0, fs_hz: float = 2000.0) -> Path:
+    """A small CSV record (time, sensor, tacho) of ``seconds`` at ``fs_hz``."""
+    import numpy as np
+
+    t = np.arange(int(seconds * fs_hz)) / fs_hz
+    rows = np.column_stack([t, np.sin(2 * np.pi * 300 * t), (np.sin(2 * np.pi * 25 * t) > 0.99).astype(float)])
+    path = folder / name
+    np.savetxt(path, rows, delimiter=",", header="time,acc,tacho", comments="")
+    return path
+
+
+def test_simulate_metadata_beside_record_is_not_taken_as_sidecar(tmp_path):
+    """gearpit simulate's case.json (keys case, software_version, mesh_frequency_hz) is passed over: the usual
+    no-sidecar path writes the template, and the message says what case.json is."""
+    import json
+
+    from compare.measurement import load_measurement
+
+    rec = _record(tmp_path)
+    (tmp_path / "case.json").write_text(json.dumps(SIM_META))
+    with pytest.raises(InputError) as err:
+        load_measurement(rec)
+    msg = str(err.value)
+    assert "case.json beside it is gearpit simulate's metadata, not a sidecar" in msg
+    assert "case.csv.toml.template" in msg and (tmp_path / "case.csv.toml.template").is_file()
+    assert len(msg) < 500
+
+
+def test_simulate_metadata_given_as_meta_is_refused_shortly(tmp_path):
+    import json
+
+    from compare.measurement import load_measurement
+
+    rec = _record(tmp_path)
+    (tmp_path / "case.json").write_text(json.dumps(SIM_META))
+    with pytest.raises(InputError, match="gearpit simulate's metadata") as err:
+        load_measurement(rec, tmp_path / "case.json")
+    assert len(str(err.value)) < 300
+
+
+def test_error_on_a_whole_table_shows_its_keys_only():
+    """An error whose value is a long table (a case dict) names its keys instead of dumping it; short ones stay."""
+    from gearpit.tomlio import check_keys
+
+    with pytest.raises(InputError) as err:
+        check_keys(SIM_META, {"fs_hz", "pair"}, "case.json")
+    assert str(err.value).startswith("case.json.case: got a table with keys duration_s, fs_hz, pair, operating;")
+    assert "spur-gds" not in str(err.value)
+    assert str(InputError("x", {"a": 1}, "b")) == "x: got {'a': 1}; allowed: b"
