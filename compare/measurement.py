@@ -102,15 +102,17 @@ class Sidecar:
                 v = d[key]
                 ok = isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
                 require(ok, f"{where}.{key}", v, "a finite number")
-                if key != "start_s" and key != "torque_nm":
+                if key not in ("start_s", "torque_nm"):
                     require_positive(f"{where}.{key}", float(v))
-                if key in ("start_s", "torque_nm"):
+                if key == "start_s":
                     require(v >= 0, f"{where}.{key}", v, "a number >= 0")
+                if key == "torque_nm":
+                    _check_torque(f"{where}.{key}", v)
                 kw[key] = float(v)
         for key in ("sensor", "tacho"):
             if key in d:
                 v = d[key]
-                require(isinstance(v, str) or (isinstance(v, int) and not isinstance(v, bool) and v >= 0),
+                require((isinstance(v, str) and v != "") or (isinstance(v, int) and not isinstance(v, bool) and v >= 0),
                         f"{where}.{key}", v, "a channel name or a 0-based column index")
                 kw[key] = v
         if "tacho_pulses_per_rev" in d:
@@ -153,6 +155,15 @@ class Sidecar:
         return out
 
 
+def _check_torque(field: str, value) -> None:
+    """The pinion torque in :data:`datagen.case_options.TORQUE_RANGE_NM` (an unloaded pair cannot be simulated)."""
+    from datagen.case_options import TORQUE_RANGE_NM
+
+    lo, hi = TORQUE_RANGE_NM
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and lo <= value <= hi
+    require(ok, field, value, f"a number in [{lo:g}, {hi:g}] N m (> 0: a loaded pair; the pinion torque)")
+
+
 def simulated_channels() -> tuple[str, ...]:
     """Names of the channels a simulation outputs (:mod:`datagen.output_channels`; axial ones for helical pairs
     only), the tacho pulses excepted."""
@@ -175,6 +186,9 @@ def _pair(value, where: str):
     from datagen.pair_file import pair_from_dict
 
     if isinstance(value, str):
+        from datagen.geometry import PRESETS
+
+        require(value in PRESETS, where, value, f"a preset ({', '.join(PRESETS)}) or a [pair] table")
         return preset(value)
     require(isinstance(value, dict), where, value, "a preset name or a pair table")
     return pair_from_dict(value, where=where)
@@ -304,6 +318,7 @@ def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "
     require_positive("speed_rpm", float(speed))
     torque = sidecar.torque_nm if sidecar.torque_nm is not None else hints.get("torque_nm", None)
     require(torque is not None, "torque_nm", None, "the pinion torque in the sidecar")
+    _check_torque("torque_nm", torque)
     sensor_ref = sidecar.sensor if sidecar.sensor is not None else hints.get("sensor")
     if sensor_ref is None and len(names) == 1:
         sensor_ref = names[0]

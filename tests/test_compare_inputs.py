@@ -161,3 +161,53 @@ def test_error_on_a_whole_table_shows_its_keys_only():
     assert str(err.value).startswith("case.json.case: got a table with keys duration_s, fs_hz, pair, operating;")
     assert "spur-gds" not in str(err.value)
     assert str(InputError("x", {"a": 1}, "b")) == "x: got {'a': 1}; allowed: b"
+
+
+# ---------------------------------------------------------------------- the template and the operating point
+def test_unfilled_template_is_refused_by_name_for_each_required_key(tmp_path):
+    """Every required key of the template holds no valid value: filling them in one at a time, each unfilled one is
+    refused by name, before any work; filled in, the sidecar reads."""
+    from compare.measurement import read_sidecar
+    from compare.sidecar_template import write_template
+
+    rec = _record(tmp_path, "rig.csv")
+    text = write_template(rec).read_text()
+    filled = {"pair": ('pair = ""', 'pair = "spur-gds"'), "speed_rpm": ("speed_rpm = 0", "speed_rpm = 1500"),
+              "torque_nm": ("torque_nm = 0", "torque_nm = 11.3"), "sensor": ('sensor = ""', 'sensor = "acc"')}
+    for key, (blank, value) in filled.items():
+        assert blank in text
+        (tmp_path / "rig.toml").write_text(text)
+        with pytest.raises(InputError, match=rf"^rig\.toml\.{key}: got"):
+            read_sidecar(tmp_path / "rig.toml")
+        text = text.replace(blank, value)
+    (tmp_path / "rig.toml").write_text(text)
+    side = read_sidecar(tmp_path / "rig.toml")
+    assert (side.speed_rpm, side.torque_nm, side.sensor) == (1500.0, 11.3, "acc")
+
+
+@pytest.mark.parametrize("line, field, allowed", [
+    ("torque_nm = 0", "torque_nm", r"a number in \[0\.001, 1e\+06\] N m"),
+    ("torque_nm = -5.0", "torque_nm", r"a number in \[0\.001, 1e\+06\] N m"),
+    ("torque_nm = 2e6", "torque_nm", r"a number in \[0\.001, 1e\+06\] N m"),
+    ("speed_rpm = 0", "speed_rpm", "a finite number > 0"),
+    ('pair = ""', "pair", r"a preset \(helical-dct, spur-gds\) or a \[pair\] table"),
+])
+def test_operating_point_outside_its_range_is_refused(tmp_path, line, field, allowed):
+    from compare.measurement import read_sidecar
+
+    base = {"speed_rpm": "speed_rpm = 1500", "torque_nm": "torque_nm = 11.3", "pair": 'pair = "spur-gds"'}
+    base[field] = line
+    (tmp_path / "rig.toml").write_text("\n".join(base.values()) + '\nsensor = "acc"\n')
+    with pytest.raises(InputError, match=rf"^rig\.toml\.{field}: got .*; allowed: {allowed}"):
+        read_sidecar(tmp_path / "rig.toml")
+
+
+def test_torque_range_is_datagens():
+    """The sidecar's torque range is the simulator's (imported, not copied)."""
+    from compare.measurement import Sidecar
+    from datagen import case_options
+
+    lo, _ = case_options.TORQUE_RANGE_NM
+    assert Sidecar.from_dict({"pair": "spur-gds", "torque_nm": lo}).torque_nm == lo
+    with pytest.raises(InputError, match="torque_nm"):
+        Sidecar.from_dict({"pair": "spur-gds", "torque_nm": lo / 2})
