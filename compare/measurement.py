@@ -328,6 +328,14 @@ def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "
     tacho = _channel(tacho_ref, names, "tacho") if tacho_ref is not None else None
     require(tacho != sensor, "tacho", tacho, "a channel other than the sensor")
     data = {k: np.asarray(v, dtype=float).ravel() for k, v in channels.items()}
+    pair = sidecar.pair
+    slow_hz = pair.shaft_frequency_hz("wheel" if pair.wheel.teeth >= pair.pinion.teeth else "pinion", float(speed))
+    n_min = int(math.ceil(MIN_REVOLUTIONS * fs / slow_hz))
+    length_s = data[sensor].size / fs
+    latest_s = (data[sensor].size - n_min) / fs
+    require(sidecar.start_s == 0.0 or sidecar.start_s <= latest_s, "start_s", sidecar.start_s,
+            f"<= {max(latest_s, 0.0):.4g} s: the record length {length_s:.4g} s minus two revolutions of the slower "
+            f"shaft ({MIN_REVOLUTIONS / slow_hz:.3g} s at {float(speed):g} rpm)")
     i0 = int(round(sidecar.start_s * fs))
     i1 = data[sensor].size if sidecar.duration_s is None else i0 + int(round(sidecar.duration_s * fs))
     require(i1 <= data[sensor].size, "start_s + duration_s", sidecar.start_s + (sidecar.duration_s or 0.0),
@@ -354,9 +362,6 @@ def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "
         require(data[sensor].size > 2 * cut + 1, "measurement length", data[sensor].size,
                 f"> {2 * cut + 1} samples to read the {sidecar.sensor_quantity} as {read_as}")
         data = {k: (derivative(v, float(fs), order) if k == sensor else v[cut:-cut]) for k, v in data.items()}
-    pair = sidecar.pair
-    slow_hz = pair.shaft_frequency_hz("wheel" if pair.wheel.teeth >= pair.pinion.teeth else "pinion", float(speed))
-    n_min = int(math.ceil(MIN_REVOLUTIONS * fs / slow_hz))
     require(data[sensor].size >= n_min, "measurement length", f"{data[sensor].size} samples "
             f"({data[sensor].size / fs:.3g} s)", f">= {n_min} samples: two revolutions of the slower shaft "
             f"({MIN_REVOLUTIONS / slow_hz:.3g} s at {float(speed):g} rpm)")

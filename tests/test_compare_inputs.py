@@ -211,3 +211,16 @@ def test_torque_range_is_datagens():
     assert Sidecar.from_dict({"pair": "spur-gds", "torque_nm": lo}).torque_nm == lo
     with pytest.raises(InputError, match="torque_nm"):
         Sidecar.from_dict({"pair": "spur-gds", "torque_nm": lo / 2})
+
+
+def test_start_past_the_end_is_refused_naming_start_s(tmp_path):
+    """start_s = 5 s on a 2 s record (spur-gds at 1500 rpm: two wheel revolutions are 0.276 s) is refused with the
+    latest allowed start, 2 - 0.276 = 1.724 s, instead of a zero-size array traceback."""
+    from compare.measurement import Sidecar, load_measurement
+
+    rec = _record(tmp_path, "rig.csv")
+    side = {"pair": "spur-gds", "speed_rpm": 1500.0, "torque_nm": 11.3, "sensor": "acc"}
+    with pytest.raises(InputError, match=r"^start_s: got 5\.0; allowed: <= 1\.724 s: the record length 2 s minus "
+                                         r"two revolutions of the slower shaft \(0\.276 s at 1500 rpm\)"):
+        load_measurement(rec, Sidecar.from_dict({**side, "start_s": 5.0}))
+    assert load_measurement(rec, Sidecar.from_dict({**side, "start_s": 1.7})).n_samples == 600
