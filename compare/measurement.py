@@ -45,7 +45,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -225,22 +225,29 @@ def _is_simulate_metadata_file(path: Path) -> bool:
         return False
 
 
+class NoSidecarError(InputError):
+    """No sidecar beside a measurement (:func:`find_sidecar`): the caller may leave a template for it."""
+
+
 def find_sidecar(measurement_path: str | Path) -> Path:
     """The sidecar beside a measurement: same stem with one of :data:`SIDECAR_SUFFIXES`. A JSON file that is
     ``gearpit simulate``'s metadata (the ``case.json`` beside ``case.csv``) is passed over, and the error when no
-    sidecar is found says so."""
+    sidecar is found (:class:`NoSidecarError`) says so; two sidecars (``rig.toml`` and ``rig.json``) are refused
+    naming both (``--meta`` picks one)."""
     p = Path(measurement_path)
     candidates = [p.with_name(p.stem + s) for s in SIDECAR_SUFFIXES] + [p.with_name(p.name + s) for s in (".toml", ".json")]
-    skipped = []
+    found, skipped = [], []
     for c in candidates:
-        if c.is_file() and c != p:
-            if _is_simulate_metadata_file(c):
-                skipped.append(c.name)
-                continue
-            return c
-    note = "".join(f"; {name} beside it is gearpit simulate's metadata, not a sidecar" for name in skipped)
-    raise InputError("--meta", None, "a sidecar (JSON/TOML) given with --meta or found beside the file as "
-                     + " or ".join(c.name for c in candidates[:2]) + note)
+        if c.is_file() and c != p and c not in found:
+            (skipped if _is_simulate_metadata_file(c) else found).append(c)
+    if len(found) > 1:
+        raise InputError("sidecar", " and ".join(c.name for c in found),
+                         f"one sidecar beside {p.name} (give the one to use with --meta, or remove the others)")
+    if found:
+        return found[0]
+    note = "".join(f"; {c.name} beside it is gearpit simulate's metadata, not a sidecar" for c in skipped)
+    raise NoSidecarError("--meta", None, "a sidecar (JSON/TOML) given with --meta or found beside the file as "
+                         + " or ".join(c.name for c in candidates[:2]) + note)
 
 
 @dataclass(frozen=True, eq=False)
@@ -273,6 +280,8 @@ class Measurement:
     fault: str | None = None
     #: further channels: measured column -> the simulated channel it corresponds to (sidecar ``secondary``)
     secondary: dict = field(default_factory=dict)
+    #: the sidecar file read (found beside the file or given with ``--meta``); None: given as a :class:`Sidecar`
+    sidecar_path: str | None = None
 
     @property
     def signal(self) -> np.ndarray:
@@ -397,7 +406,7 @@ def load_measurement(path: str | Path, sidecar: Sidecar | str | Path | None = No
         if sidecar is None:
             try:
                 sidecar = find_sidecar(p)
-            except InputError as exc:     # none: leave one to fill in (compare.sidecar_template)
+            except NoSidecarError as exc:     # none: leave one to fill in (compare.sidecar_template)
                 from compare.sidecar_template import write_template
 
                 made = write_template(p)
@@ -405,7 +414,10 @@ def load_measurement(path: str | Path, sidecar: Sidecar | str | Path | None = No
                     raise
                 raise InputError(exc.field, exc.value, f"{exc.allowed}; a template with this file's channels was "
                                  f"written: {made} (fill it in, save it as {p.stem}.toml)") from None
+        sidecar_path = str(sidecar)
         sidecar = read_sidecar(sidecar)
+    else:
+        sidecar_path = None
     named_by_sidecar = sidecar.channels is not None and sidecar.time_column in sidecar.channels
     rec = read_record(p, sidecar.format, time_column=None if named_by_sidecar else sidecar.time_column,
                       variable=sidecar.variable, fs_hz=sidecar.fs_hz)
@@ -423,4 +435,5 @@ def load_measurement(path: str | Path, sidecar: Sidecar | str | Path | None = No
                     f"the file's own sampling rate {rec.fs_hz:.6g} Hz (or leave fs_hz out)")
         hints["fs_hz"] = rec.fs_hz
     channels = {name: rec.data[:, i] for i, name in enumerate(names)}
-    return measurement_from_arrays(channels, sidecar, source=str(p), hints=hints, read_as=read_as)
+    m = measurement_from_arrays(channels, sidecar, source=str(p), hints=hints, read_as=read_as)
+    return replace(m, sidecar_path=sidecar_path)

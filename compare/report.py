@@ -57,7 +57,8 @@ def document(comparison, attribution=None, ledger_rows=(), *, measurement_path: 
     doc = {
         "schema": SCHEMA_ID,
         "software_version": __version__,
-        "measurement": {"path": measurement_path or m.source, "fs_hz": m.fs_hz, "n_samples": m.n_samples,
+        "measurement": {"path": measurement_path or m.source, "sidecar": m.sidecar_path,
+                        "fs_hz": m.fs_hz, "n_samples": m.n_samples,
                         "sensor": m.sensor, "sensor_quantity": m.sidecar.sensor_quantity, "tacho": m.tacho,
                         "fault": m.fault,
                         "speed_rpm_nominal": m.speed_rpm, "speed_rpm": ref.speed.speed_rpm,
@@ -197,7 +198,9 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
     parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>gearpit compare</title><style>{_CSS}</style>"
              "</head><body>",
              "<h1>Model versus measurement</h1>",
-             f"<p>Measurement <code>{html.escape(str(m['path']))}</code>: sensor <code>{html.escape(m['sensor'])}</code>"
+             f"<p>Measurement <code>{html.escape(str(m['path']))}</code>"
+             + ("" if not m.get("sidecar") else f" (sidecar <code>{html.escape(str(m['sidecar']))}</code>)")
+             + f": sensor <code>{html.escape(m['sensor'])}</code>"
              + ("" if m.get("sensor_quantity", "acceleration") == "acceleration" else
                 f" (a {html.escape(m['sensor_quantity'])}, read as acceleration)") + ", "
              f"fs {m['fs_hz']:g} Hz, {m['n_samples']} samples; speed {m['speed_rpm']:.3f} rpm "

@@ -28,7 +28,11 @@ SCHEMA = {
             "type": "object",
             "required": ["path", "fs_hz", "n_samples", "sensor", "speed_rpm", "speed_rpm_nominal", "speed_method",
                          "torque_nm", "pair"],
-            "properties": {"path": {"type": "string"}, "fs_hz": {"type": "number"}, "n_samples": {"type": "integer"},
+            "properties": {"path": {"type": "string"},
+                           "sidecar": {"type": ["string", "null"],
+                                       "description": "the sidecar file read (found beside the measurement or given "
+                                                      "with --meta); null: given in Python as a Sidecar"},
+                           "fs_hz": {"type": "number"}, "n_samples": {"type": "integer"},
                            "sensor": {"type": "string"},
                            "sensor_quantity": {"enum": ["acceleration", "velocity", "displacement"],
                                                "description": "what the sensor measures (sidecar); a velocity or "

@@ -224,3 +224,25 @@ def test_start_past_the_end_is_refused_naming_start_s(tmp_path):
                                          r"two revolutions of the slower shaft \(0\.276 s at 1500 rpm\)"):
         load_measurement(rec, Sidecar.from_dict({**side, "start_s": 5.0}))
     assert load_measurement(rec, Sidecar.from_dict({**side, "start_s": 1.7})).n_samples == 600
+
+
+def test_two_sidecars_beside_a_file_are_refused_naming_both(tmp_path):
+    """rig.toml and rig.json with different content: neither is taken silently; --meta picks one, and the
+    measurement records which (the JSON report's measurement.sidecar)."""
+    from compare.measurement import find_sidecar, load_measurement
+    from compare.schema import SCHEMA
+
+    rec = _record(tmp_path, "rig.csv")
+    (tmp_path / "rig.toml").write_text('pair = "spur-gds"\nspeed_rpm = 1500\ntorque_nm = 11.3\nsensor = "acc"\n')
+    (tmp_path / "rig.json").write_text('{"pair": "spur-gds", "speed_rpm": 1400, "torque_nm": 20, "sensor": "acc"}')
+    with pytest.raises(InputError, match=r"^sidecar: got 'rig\.toml and rig\.json'; allowed: one sidecar beside "
+                                         r"rig\.csv \(give the one to use with --meta"):
+        load_measurement(rec)
+    with pytest.raises(InputError, match="rig.toml and rig.json"):
+        find_sidecar(rec)
+    assert not (tmp_path / "rig.csv.toml.template").exists()
+    m = load_measurement(rec, tmp_path / "rig.json")
+    assert (m.speed_rpm, m.sidecar_path) == (1400.0, str(tmp_path / "rig.json"))
+    (tmp_path / "rig.json").unlink()
+    assert load_measurement(rec).sidecar_path == str(tmp_path / "rig.toml")
+    assert "sidecar" in SCHEMA["properties"]["measurement"]["properties"]
