@@ -418,6 +418,10 @@ def load_measurement(path: str | Path, sidecar: Sidecar | str | Path | None = No
         sidecar = read_sidecar(sidecar)
     else:
         sidecar_path = None
+    if sidecar.reference is not None:    # refused now, not when a classifier reads it
+        ref = (p.parent / sidecar.reference).resolve()
+        require(ref.is_file(), f"{Path(sidecar_path).name}.reference" if sidecar_path else "reference",
+                sidecar.reference, f"an existing measurement file, relative to {p.name}'s folder (resolved: {ref})")
     named_by_sidecar = sidecar.channels is not None and sidecar.time_column in sidecar.channels
     rec = read_record(p, sidecar.format, time_column=None if named_by_sidecar else sidecar.time_column,
                       variable=sidecar.variable, fs_hz=sidecar.fs_hz)

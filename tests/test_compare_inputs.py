@@ -246,3 +246,21 @@ def test_two_sidecars_beside_a_file_are_refused_naming_both(tmp_path):
     (tmp_path / "rig.json").unlink()
     assert load_measurement(rec).sidecar_path == str(tmp_path / "rig.toml")
     assert "sidecar" in SCHEMA["properties"]["measurement"]["properties"]
+
+
+def test_missing_reference_is_refused_when_the_sidecar_is_read(tmp_path):
+    """A sidecar whose reference does not exist is refused naming the key and the resolved path (it was accepted
+    silently by gearpit compare)."""
+    from compare.measurement import load_measurement
+
+    rec = _record(tmp_path, "rig.csv")
+    (tmp_path / "rig.toml").write_text('pair = "spur-gds"\nspeed_rpm = 1500\ntorque_nm = 11.3\nsensor = "acc"\n'
+                                       'reference = "nothere.npz"\n')
+    resolved = (tmp_path / "nothere.npz").resolve()
+    with pytest.raises(InputError, match=r"^rig\.toml\.reference: got 'nothere\.npz'; allowed: an existing "
+                                         r"measurement file") as err:
+        load_measurement(rec)
+    assert str(resolved) in str(err.value)
+    _record(tmp_path, "nothere.csv")
+    (tmp_path / "rig.toml").write_text((tmp_path / "rig.toml").read_text().replace("nothere.npz", "nothere.csv"))
+    assert load_measurement(rec).sidecar.reference == "nothere.csv"
