@@ -177,13 +177,17 @@ def _calibration_html(cal: dict | None, escalation: dict | None = None) -> list[
                       " (not kept: it lowered the error by less than 10 %).") + "</p>")
     if cal is None:
         return why + ["<p>Nuisance calibration: off (the drive train as the model file gives it).</p>"]
-    rows = [[k, _fmt(cal["start"].get(k), 4), _fmt(v, 4), _fmt(cal["sigma"].get(k), 2)]
+    at_bound = cal.get("at_bound", {})
+    rows = [[k, _fmt(cal["start"].get(k), 4), _fmt(v, 4) + bound_note(k, at_bound, ()),
+             _fmt(cal["sigma"].get(k), 2) if cal["sigma"].get(k) is not None or k not in at_bound else
+             "- (on a bound: the error still falls towards it)"]
             for k, v in cal["parameters"].items()]
     return ["<h2>Nuisance calibration</h2>",
             "<p>Drive-train parameters nobody measures, fitted to the measurement before the attribution together "
             "with the sensor gain (module <code>compare.calibration</code>); the calibrated model is the baseline "
             "every candidate effect is measured against.</p>",
-            _table(["parameter", "model file / default", "calibrated", "1 sigma ('-': not identifiable)"], rows),
+            _table(["parameter", "model file / default", "calibrated",
+                    "1 sigma ('-': not identifiable, or on a bound of its search)"], rows),
             f"<p>Raw total error (before the noise correction) {cal['error_before_db']:.3f} dB before, "
             f"{cal['error_db']:.3f} dB after "
             f"({cal['n_simulations']} simulations, {cal['elapsed_s']:.1f} s).</p>", *why]

@@ -87,7 +87,10 @@ SCHEMA = {
             "properties": {"parameters": {"type": "object", "additionalProperties": {"type": "number"},
                                           "description": "calibrated drive-train fields (SI)"},
                            "sigma": {"type": "object", "additionalProperties": NUM,
-                                     "description": "1-sigma (SI), null: not identifiable"},
+                                     "description": "1-sigma (SI), null: not identifiable, or on a bound (at_bound)"},
+                           "at_bound": {"type": "object", "additionalProperties": {"enum": ["lower", "upper"]},
+                                        "description": "calibrated fields on a bound of their search "
+                                                       "(compare.calibration.NUISANCES): lower or upper"},
                            "start": {"type": "object", "additionalProperties": {"type": "number"}},
                            "error_before_db": {"type": "number", "description": "raw total error E at the start"},
                            "error_db": {"type": "number", "description": "raw total error E calibrated"},

@@ -264,3 +264,46 @@ def test_missing_reference_is_refused_when_the_sidecar_is_read(tmp_path):
     _record(tmp_path, "nothere.csv")
     (tmp_path / "rig.toml").write_text((tmp_path / "rig.toml").read_text().replace("nothere.npz", "nothere.csv"))
     assert load_measurement(rec).sidecar.reference == "nothere.csv"
+
+
+# ---------------------------------------------------------------------- wording of ranges and bounds
+def test_dimensionless_range_has_no_unit_dash():
+    """A dimensionless parameter's range reads "[0.0, 0.6]", not "[0.0, 0.6] -"; a dimensional one keeps its unit."""
+    from datagen.effects import EffectSpec
+
+    with pytest.raises(InputError) as err:
+        EffectSpec.from_string("tooth_pit:severity=5")
+    assert str(err.value).endswith("allowed: a number in [0.0, 0.6]")
+    with pytest.raises(InputError) as err:
+        EffectSpec.from_string("eccentricity_pinion:amplitude_m=1")
+    assert str(err.value).endswith("allowed: a number in [0.0, 0.0002] m")
+
+
+def test_calibration_on_its_bound_is_worded_as_on_its_bound():
+    """A rig whose mesh damping (0.25) lies above the calibration's box (0.03-0.1): the fit ends on the upper bound,
+    recorded as at_bound, and the CLI line and the HTML say "on its upper bound", not "not identifiable"."""
+    from compare.calibration import CalibrationSettings, calibrate, calibration_message
+    from compare.comparison import prepare_reference
+    from compare.model import ComparisonModel
+    from compare.report import _calibration_html
+    from compare.synthetic import NUISANCE, rig_measurement
+
+    m = rig_measurement(duration_s=0.5, nuisance={**NUISANCE, "mesh_damping_ratio": 0.25})
+    cal = calibrate(prepare_reference(m), ComparisonModel(),
+                    settings=CalibrationSettings(parameters=("mesh_damping_ratio",), widths_u=(0.3, 0.1),
+                                                 points_per_side=(2, 1)))
+    assert cal.values["mesh_damping_ratio"] == pytest.approx(0.1)
+    assert cal.at_bound == {"mesh_damping_ratio": "upper"} and cal.to_dict()["at_bound"] == cal.at_bound
+    assert calibration_message(cal).startswith("nuisances calibrated: mesh_damping_ratio 0.1 (on its upper bound) (")
+    page = "".join(_calibration_html(cal.to_dict()))
+    assert "0.1 (on its upper bound)" in page and "on a bound" in page
+
+
+def test_calibration_message_gives_sigma_inside_and_not_identifiable_when_flat():
+    from compare.calibration import Calibration, calibration_message
+
+    cal = Calibration(values={"bearing_n_per_m": 1.115e8, "bearing_damping_ratio": 0.05},
+                      sigma={"bearing_n_per_m": 1.15e7, "bearing_damping_ratio": float("inf")},
+                      start={}, error_before_db=9.36, error_db=8.98, gain_db=0.0, n_simulations=1, elapsed_s=0.0)
+    assert calibration_message(cal) == ("nuisances calibrated: bearing_n_per_m 1.115e+08 +/- 1.2e+07, "
+                                        "bearing_damping_ratio 0.05 (not identifiable) (error 9.36 -> 8.98 dB)")
