@@ -131,7 +131,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from compare.calibration_points import Point, evaluate_points, find_point, scan_sigma, scan_vertex
-from compare.fitspace import FitParameter
+from compare.fitspace import FitParameter, bound_side
 from gearpit.errors import require
 
 #: calibrated drive-train fields (datagen.lumped_model.DriveTrain) and their search bounds (SI, log scale)
@@ -185,7 +185,7 @@ class Calibration:
     values : dict
         Calibrated drive-train fields (SI), the model's drive train to use.
     sigma : dict
-        1-sigma of each (SI; ``inf``: not identifiable from these views).
+        1-sigma of each (SI; ``inf``: not identifiable from these views, or on a bound: see ``at_bound``).
     start : dict
         The values before calibration (the model's drive train).
     error_before_db, error_db : float
@@ -202,6 +202,10 @@ class Calibration:
         The error over the calibration's ``views`` (what is minimised), before and after (dB).
     gain_db : float
         The sensor gain fitted with the calibrated values (dB).
+    at_bound : dict
+        The calibrated fields on a bound of their search (:data:`NUISANCES`): name -> "lower" or "upper"
+        (:func:`compare.fitspace.bound_side`); their scan is one-sided, so a ``sigma`` of ``inf`` there means "on
+        its bound", not "not identifiable".
     """
 
     values: dict
@@ -220,10 +224,12 @@ class Calibration:
     effect_sigma: dict = field(default_factory=dict)
     residual_db: np.ndarray | None = field(default=None, repr=False)
     view_error_db: dict = field(default_factory=dict)
+    at_bound: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         return {"parameters": {k: float(v) for k, v in self.values.items()},
                 "sigma": {k: (float(v) if math.isfinite(v) else None) for k, v in self.sigma.items()},
+                "at_bound": dict(self.at_bound),
                 "start": {k: float(v) for k, v in self.start.items()},
                 "error_before_db": float(self.error_before_db), "error_db": float(self.error_db),
                 "views": list(self.views), "held_out": list(self.held_out),
@@ -347,11 +353,33 @@ def calibrate(ref, model, *, extra_effects: tuple = (), settings: CalibrationSet
     effect_sigma = {k: v for k, v in sigma.items() if k not in names}
     sigma = {k: v for k, v in sigma.items() if k in names}
     s0 = {k: v for k, v in s0.items() if k in names}
-    return Calibration(values=values, sigma=sigma, start=s0, error_before_db=first.total_db, error_db=best.total_db,
+    at_bound = {p.name: side for p in params if p.name in values
+                and (side := bound_side(float(p.to_u(values[p.name])))) is not None}
+    return Calibration(values=values, sigma=sigma, start=s0, at_bound=at_bound, error_before_db=first.total_db, error_db=best.total_db,
                        objective_before_db=first.error_db, objective_db=best.error_db, views=tuple(settings.views),
                        held_out=held_out, effect_params=effect_params, effect_sigma=effect_sigma,
                        gain_db=best.gain_db, n_simulations=counter[0], elapsed_s=time.perf_counter() - t0,
                        residual_db=best.residual_db, view_error_db=best.view_error_db)
+
+
+def value_text(name: str, value: float, sigma: float | None, at_bound: dict) -> str:
+    """A calibrated value as the CLI and the report write it: ``0.0891 +/- 0.04``, or ``0.1 (on its upper bound)``
+    (:func:`compare.candidates.bound_note`; its scan is one-sided there, so it has no 1-sigma), or
+    ``0.05 (not identifiable)`` when the error does not change along it."""
+    from compare.candidates import bound_note
+
+    text = f"{value:.4g}"
+    if sigma is not None and math.isfinite(sigma):
+        text += f" +/- {sigma:.2g}"
+    return text + (bound_note(name, at_bound, ()) or ("" if sigma is not None and math.isfinite(sigma)
+                                                      else " (not identifiable)"))
+
+
+def calibration_message(cal: "Calibration") -> str:
+    """The CLI's line for a calibration: each value with its 1-sigma or its bound note, and the error change."""
+    return ("nuisances calibrated: " + ", ".join(f"{k} {value_text(k, v, cal.sigma.get(k), cal.at_bound)}"
+                                                 for k, v in cal.values.items())
+            + f" (error {cal.error_before_db:.2f} -> {cal.error_db:.2f} dB)")
 
 
 def error_at(ref, model, values: dict, *, settings: CalibrationSettings | None = None, solver: dict | None = None):

@@ -45,7 +45,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -60,6 +60,9 @@ SIDECAR_KEYS = ("fs_hz", "speed_rpm", "torque_nm", "pair", "sensor", "sensor_qua
                 "secondary", "reference")
 SIDECAR_SUFFIXES = (".toml", ".json", ".meta.toml", ".meta.json")
 MIN_REVOLUTIONS = 2.0
+#: keys that mark a JSON file as the metadata ``gearpit simulate`` writes beside its record
+#: (:attr:`datagen.simulate.Signals.metadata`), which is never a sidecar
+SIMULATE_METADATA_KEYS = frozenset({"case", "software_version", "mesh_frequency_hz"})
 #: sidecar ``sensor_quantity`` -> times the record is differentiated to read it as acceleration
 SENSOR_QUANTITIES = {"acceleration": 0, "velocity": 1, "displacement": 2}
 
@@ -99,15 +102,17 @@ class Sidecar:
                 v = d[key]
                 ok = isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
                 require(ok, f"{where}.{key}", v, "a finite number")
-                if key != "start_s" and key != "torque_nm":
+                if key not in ("start_s", "torque_nm"):
                     require_positive(f"{where}.{key}", float(v))
-                if key in ("start_s", "torque_nm"):
+                if key == "start_s":
                     require(v >= 0, f"{where}.{key}", v, "a number >= 0")
+                if key == "torque_nm":
+                    _check_torque(f"{where}.{key}", v)
                 kw[key] = float(v)
         for key in ("sensor", "tacho"):
             if key in d:
                 v = d[key]
-                require(isinstance(v, str) or (isinstance(v, int) and not isinstance(v, bool) and v >= 0),
+                require((isinstance(v, str) and v != "") or (isinstance(v, int) and not isinstance(v, bool) and v >= 0),
                         f"{where}.{key}", v, "a channel name or a 0-based column index")
                 kw[key] = v
         if "tacho_pulses_per_rev" in d:
@@ -150,6 +155,15 @@ class Sidecar:
         return out
 
 
+def _check_torque(field: str, value) -> None:
+    """The pinion torque in :data:`datagen.case_options.TORQUE_RANGE_NM` (an unloaded pair cannot be simulated)."""
+    from datagen.case_options import TORQUE_RANGE_NM
+
+    lo, hi = TORQUE_RANGE_NM
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and lo <= value <= hi
+    require(ok, field, value, f"a number in [{lo:g}, {hi:g}] N m (> 0: a loaded pair; the pinion torque)")
+
+
 def simulated_channels() -> tuple[str, ...]:
     """Names of the channels a simulation outputs (:mod:`datagen.output_channels`; axial ones for helical pairs
     only), the tacho pulses excepted."""
@@ -172,6 +186,9 @@ def _pair(value, where: str):
     from datagen.pair_file import pair_from_dict
 
     if isinstance(value, str):
+        from datagen.geometry import PRESETS
+
+        require(value in PRESETS, where, value, f"a preset ({', '.join(PRESETS)}) or a [pair] table")
         return preset(value)
     require(isinstance(value, dict), where, value, "a preset name or a pair table")
     return pair_from_dict(value, where=where)
@@ -187,20 +204,50 @@ def read_sidecar(path: str | Path) -> Sidecar:
             raise InputError("sidecar", str(p), f"a readable JSON file ({exc.strerror})") from None
         except json.JSONDecodeError as exc:
             raise InputError("sidecar", str(p), f"valid JSON ({exc})") from None
+        require(not is_simulate_metadata(d), "sidecar", str(p), "a sidecar (this is gearpit simulate's metadata, "
+                "not a sidecar: write one with fs_hz, speed_rpm, torque_nm, pair, sensor)")
     else:
         d = read_toml(p)
     return Sidecar.from_dict(d, where=p.name)
 
 
+def is_simulate_metadata(d) -> bool:
+    """Whether a parsed JSON file is ``gearpit simulate``'s metadata (:data:`SIMULATE_METADATA_KEYS`)."""
+    return isinstance(d, dict) and SIMULATE_METADATA_KEYS <= set(d)
+
+
+def _is_simulate_metadata_file(path: Path) -> bool:
+    if path.suffix.lower() != ".json":
+        return False
+    try:
+        return is_simulate_metadata(json.loads(path.read_text(encoding="utf-8")))
+    except (OSError, ValueError):       # unreadable or not JSON: read_sidecar says why
+        return False
+
+
+class NoSidecarError(InputError):
+    """No sidecar beside a measurement (:func:`find_sidecar`): the caller may leave a template for it."""
+
+
 def find_sidecar(measurement_path: str | Path) -> Path:
-    """The sidecar beside a measurement: same stem with one of :data:`SIDECAR_SUFFIXES`."""
+    """The sidecar beside a measurement: same stem with one of :data:`SIDECAR_SUFFIXES`. A JSON file that is
+    ``gearpit simulate``'s metadata (the ``case.json`` beside ``case.csv``) is passed over, and the error when no
+    sidecar is found (:class:`NoSidecarError`) says so; two sidecars (``rig.toml`` and ``rig.json``) are refused
+    naming both (``--meta`` picks one)."""
     p = Path(measurement_path)
     candidates = [p.with_name(p.stem + s) for s in SIDECAR_SUFFIXES] + [p.with_name(p.name + s) for s in (".toml", ".json")]
+    found, skipped = [], []
     for c in candidates:
-        if c.is_file() and c != p:
-            return c
-    raise InputError("--meta", None, "a sidecar (JSON/TOML) given with --meta or found beside the file as "
-                     + " or ".join(c.name for c in candidates[:2]))
+        if c.is_file() and c != p and c not in found:
+            (skipped if _is_simulate_metadata_file(c) else found).append(c)
+    if len(found) > 1:
+        raise InputError("sidecar", " and ".join(c.name for c in found),
+                         f"one sidecar beside {p.name} (give the one to use with --meta, or remove the others)")
+    if found:
+        return found[0]
+    note = "".join(f"; {c.name} beside it is gearpit simulate's metadata, not a sidecar" for c in skipped)
+    raise NoSidecarError("--meta", None, "a sidecar (JSON/TOML) given with --meta or found beside the file as "
+                         + " or ".join(c.name for c in candidates[:2]) + note)
 
 
 @dataclass(frozen=True, eq=False)
@@ -233,6 +280,8 @@ class Measurement:
     fault: str | None = None
     #: further channels: measured column -> the simulated channel it corresponds to (sidecar ``secondary``)
     secondary: dict = field(default_factory=dict)
+    #: the sidecar file read (found beside the file or given with ``--meta``); None: given as a :class:`Sidecar`
+    sidecar_path: str | None = None
 
     @property
     def signal(self) -> np.ndarray:
@@ -278,6 +327,7 @@ def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "
     require_positive("speed_rpm", float(speed))
     torque = sidecar.torque_nm if sidecar.torque_nm is not None else hints.get("torque_nm", None)
     require(torque is not None, "torque_nm", None, "the pinion torque in the sidecar")
+    _check_torque("torque_nm", torque)
     sensor_ref = sidecar.sensor if sidecar.sensor is not None else hints.get("sensor")
     if sensor_ref is None and len(names) == 1:
         sensor_ref = names[0]
@@ -287,6 +337,14 @@ def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "
     tacho = _channel(tacho_ref, names, "tacho") if tacho_ref is not None else None
     require(tacho != sensor, "tacho", tacho, "a channel other than the sensor")
     data = {k: np.asarray(v, dtype=float).ravel() for k, v in channels.items()}
+    pair = sidecar.pair
+    slow_hz = pair.shaft_frequency_hz("wheel" if pair.wheel.teeth >= pair.pinion.teeth else "pinion", float(speed))
+    n_min = int(math.ceil(MIN_REVOLUTIONS * fs / slow_hz))
+    length_s = data[sensor].size / fs
+    latest_s = (data[sensor].size - n_min) / fs
+    require(sidecar.start_s == 0.0 or sidecar.start_s <= latest_s, "start_s", sidecar.start_s,
+            f"<= {max(latest_s, 0.0):.4g} s: the record length {length_s:.4g} s minus two revolutions of the slower "
+            f"shaft ({MIN_REVOLUTIONS / slow_hz:.3g} s at {float(speed):g} rpm)")
     i0 = int(round(sidecar.start_s * fs))
     i1 = data[sensor].size if sidecar.duration_s is None else i0 + int(round(sidecar.duration_s * fs))
     require(i1 <= data[sensor].size, "start_s + duration_s", sidecar.start_s + (sidecar.duration_s or 0.0),
@@ -313,9 +371,6 @@ def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "
         require(data[sensor].size > 2 * cut + 1, "measurement length", data[sensor].size,
                 f"> {2 * cut + 1} samples to read the {sidecar.sensor_quantity} as {read_as}")
         data = {k: (derivative(v, float(fs), order) if k == sensor else v[cut:-cut]) for k, v in data.items()}
-    pair = sidecar.pair
-    slow_hz = pair.shaft_frequency_hz("wheel" if pair.wheel.teeth >= pair.pinion.teeth else "pinion", float(speed))
-    n_min = int(math.ceil(MIN_REVOLUTIONS * fs / slow_hz))
     require(data[sensor].size >= n_min, "measurement length", f"{data[sensor].size} samples "
             f"({data[sensor].size / fs:.3g} s)", f">= {n_min} samples: two revolutions of the slower shaft "
             f"({MIN_REVOLUTIONS / slow_hz:.3g} s at {float(speed):g} rpm)")
@@ -351,7 +406,7 @@ def load_measurement(path: str | Path, sidecar: Sidecar | str | Path | None = No
         if sidecar is None:
             try:
                 sidecar = find_sidecar(p)
-            except InputError as exc:     # none: leave one to fill in (compare.sidecar_template)
+            except NoSidecarError as exc:     # none: leave one to fill in (compare.sidecar_template)
                 from compare.sidecar_template import write_template
 
                 made = write_template(p)
@@ -359,7 +414,14 @@ def load_measurement(path: str | Path, sidecar: Sidecar | str | Path | None = No
                     raise
                 raise InputError(exc.field, exc.value, f"{exc.allowed}; a template with this file's channels was "
                                  f"written: {made} (fill it in, save it as {p.stem}.toml)") from None
+        sidecar_path = str(sidecar)
         sidecar = read_sidecar(sidecar)
+    else:
+        sidecar_path = None
+    if sidecar.reference is not None:    # refused now, not when a classifier reads it
+        ref = (p.parent / sidecar.reference).resolve()
+        require(ref.is_file(), f"{Path(sidecar_path).name}.reference" if sidecar_path else "reference",
+                sidecar.reference, f"an existing measurement file, relative to {p.name}'s folder (resolved: {ref})")
     named_by_sidecar = sidecar.channels is not None and sidecar.time_column in sidecar.channels
     rec = read_record(p, sidecar.format, time_column=None if named_by_sidecar else sidecar.time_column,
                       variable=sidecar.variable, fs_hz=sidecar.fs_hz)
@@ -377,4 +439,5 @@ def load_measurement(path: str | Path, sidecar: Sidecar | str | Path | None = No
                     f"the file's own sampling rate {rec.fs_hz:.6g} Hz (or leave fs_hz out)")
         hints["fs_hz"] = rec.fs_hz
     channels = {name: rec.data[:, i] for i, name in enumerate(names)}
-    return measurement_from_arrays(channels, sidecar, source=str(p), hints=hints, read_as=read_as)
+    m = measurement_from_arrays(channels, sidecar, source=str(p), hints=hints, read_as=read_as)
+    return replace(m, sidecar_path=sidecar_path)

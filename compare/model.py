@@ -112,7 +112,27 @@ class ComparisonModel:
         return out
 
     def with_plugin(self, plugin: str) -> "ComparisonModel":
-        return self if plugin in self.plugins else replace(self, plugins=self.plugins + (plugin,))
+        """The model with ``plugin`` in its plugins list (once), stored relative to the model file when it lies
+        under the model's folder (moving the folder keeps the model working), else absolute."""
+        entry = self._plugin_entry(plugin)
+        have = {self._resolve_plugin(p) for p in self.plugins}
+        return self if self._resolve_plugin(entry) in have else replace(self, plugins=self.plugins + (entry,))
+
+    def _plugin_entry(self, plugin: str) -> str:
+        """How ``plugin`` is written into the model file: relative to its folder when under it."""
+        if self.path is None:
+            return str(plugin)
+        base = self.path.resolve().parent
+        try:
+            return Path(plugin).resolve().relative_to(base).as_posix()
+        except ValueError:      # outside the model's folder
+            return str(Path(plugin).resolve())
+
+    def _resolve_plugin(self, entry: str) -> Path:
+        """A plugins entry as a path: relative entries against the model file's folder (as :meth:`from_dict`)."""
+        p = Path(entry)
+        base = self.path.parent if self.path is not None else Path(".")
+        return (p if p.is_absolute() else base / p).resolve()
 
     @property
     def effect_names(self) -> tuple:

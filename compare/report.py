@@ -57,7 +57,8 @@ def document(comparison, attribution=None, ledger_rows=(), *, measurement_path: 
     doc = {
         "schema": SCHEMA_ID,
         "software_version": __version__,
-        "measurement": {"path": measurement_path or m.source, "fs_hz": m.fs_hz, "n_samples": m.n_samples,
+        "measurement": {"path": measurement_path or m.source, "sidecar": m.sidecar_path,
+                        "fs_hz": m.fs_hz, "n_samples": m.n_samples,
                         "sensor": m.sensor, "sensor_quantity": m.sidecar.sensor_quantity, "tacho": m.tacho,
                         "fault": m.fault,
                         "speed_rpm_nominal": m.speed_rpm, "speed_rpm": ref.speed.speed_rpm,
@@ -176,13 +177,17 @@ def _calibration_html(cal: dict | None, escalation: dict | None = None) -> list[
                       " (not kept: it lowered the error by less than 10 %).") + "</p>")
     if cal is None:
         return why + ["<p>Nuisance calibration: off (the drive train as the model file gives it).</p>"]
-    rows = [[k, _fmt(cal["start"].get(k), 4), _fmt(v, 4), _fmt(cal["sigma"].get(k), 2)]
+    at_bound = cal.get("at_bound", {})
+    rows = [[k, _fmt(cal["start"].get(k), 4), _fmt(v, 4) + bound_note(k, at_bound, ()),
+             _fmt(cal["sigma"].get(k), 2) if cal["sigma"].get(k) is not None or k not in at_bound else
+             "- (on a bound: the error still falls towards it)"]
             for k, v in cal["parameters"].items()]
     return ["<h2>Nuisance calibration</h2>",
             "<p>Drive-train parameters nobody measures, fitted to the measurement before the attribution together "
             "with the sensor gain (module <code>compare.calibration</code>); the calibrated model is the baseline "
             "every candidate effect is measured against.</p>",
-            _table(["parameter", "model file / default", "calibrated", "1 sigma ('-': not identifiable)"], rows),
+            _table(["parameter", "model file / default", "calibrated",
+                    "1 sigma ('-': not identifiable, or on a bound of its search)"], rows),
             f"<p>Raw total error (before the noise correction) {cal['error_before_db']:.3f} dB before, "
             f"{cal['error_db']:.3f} dB after "
             f"({cal['n_simulations']} simulations, {cal['elapsed_s']:.1f} s).</p>", *why]
@@ -197,7 +202,9 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
     parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>gearpit compare</title><style>{_CSS}</style>"
              "</head><body>",
              "<h1>Model versus measurement</h1>",
-             f"<p>Measurement <code>{html.escape(str(m['path']))}</code>: sensor <code>{html.escape(m['sensor'])}</code>"
+             f"<p>Measurement <code>{html.escape(str(m['path']))}</code>"
+             + ("" if not m.get("sidecar") else f" (sidecar <code>{html.escape(str(m['sidecar']))}</code>)")
+             + f": sensor <code>{html.escape(m['sensor'])}</code>"
              + ("" if m.get("sensor_quantity", "acceleration") == "acceleration" else
                 f" (a {html.escape(m['sensor_quantity'])}, read as acceleration)") + ", "
              f"fs {m['fs_hz']:g} Hz, {m['n_samples']} samples; speed {m['speed_rpm']:.3f} rpm "

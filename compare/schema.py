@@ -28,7 +28,11 @@ SCHEMA = {
             "type": "object",
             "required": ["path", "fs_hz", "n_samples", "sensor", "speed_rpm", "speed_rpm_nominal", "speed_method",
                          "torque_nm", "pair"],
-            "properties": {"path": {"type": "string"}, "fs_hz": {"type": "number"}, "n_samples": {"type": "integer"},
+            "properties": {"path": {"type": "string"},
+                           "sidecar": {"type": ["string", "null"],
+                                       "description": "the sidecar file read (found beside the measurement or given "
+                                                      "with --meta); null: given in Python as a Sidecar"},
+                           "fs_hz": {"type": "number"}, "n_samples": {"type": "integer"},
                            "sensor": {"type": "string"},
                            "sensor_quantity": {"enum": ["acceleration", "velocity", "displacement"],
                                                "description": "what the sensor measures (sidecar); a velocity or "
@@ -83,7 +87,10 @@ SCHEMA = {
             "properties": {"parameters": {"type": "object", "additionalProperties": {"type": "number"},
                                           "description": "calibrated drive-train fields (SI)"},
                            "sigma": {"type": "object", "additionalProperties": NUM,
-                                     "description": "1-sigma (SI), null: not identifiable"},
+                                     "description": "1-sigma (SI), null: not identifiable, or on a bound (at_bound)"},
+                           "at_bound": {"type": "object", "additionalProperties": {"enum": ["lower", "upper"]},
+                                        "description": "calibrated fields on a bound of their search "
+                                                       "(compare.calibration.NUISANCES): lower or upper"},
                            "start": {"type": "object", "additionalProperties": {"type": "number"}},
                            "error_before_db": {"type": "number", "description": "raw total error E at the start"},
                            "error_db": {"type": "number", "description": "raw total error E calibrated"},

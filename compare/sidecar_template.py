@@ -3,7 +3,8 @@
 A recording from another rig arrives without the operating point gearpit needs (:mod:`compare.measurement`).
 Rather than only refusing it, :func:`write_template` reads the file (its layout, channel names and any rate it
 states) and writes ``<file>.toml.template`` beside it: every key the comparison needs, the file's own channel
-names in place, the required values left at 0 so that an unfilled template is refused by name. It is never
+names in place (listed beside ``sensor``), the required values left at 0 or empty (``pair = ""``, ``sensor = ""``),
+never a valid value, so that an unfilled template is refused by name. It is never
 read as a sidecar until the user saves it as ``<stem>.toml``.
 """
 from __future__ import annotations
@@ -41,8 +42,8 @@ def write_template(measurement_path: str | Path) -> Path | None:
              f"speed_rpm = {float(rec.hints.get('speed_rpm', 0.0)):g}          # nominal pinion (input) speed (rpm): "
              "required; refined from the tacho or the spectrum",
              f"torque_nm = {float(rec.hints.get('torque_nm', 0.0)):g}          # pinion torque (N m): required",
-             f'pair = "{next(iter(PRESETS))}"     # a preset ({", ".join(PRESETS)}) or a [pair] table: required',
-             f'sensor = "{sensor}"' + "   # the vibration channel",
+             f'pair = ""     # required: a preset ({", ".join(PRESETS)}) or a [pair] table',
+             f'sensor = ""   # required: the vibration channel, one of {", ".join(names)} (perhaps "{sensor}")',
              '# sensor_quantity = "acceleration"   # or "velocity", "displacement"',
              (f'tacho = "{tacho}"' if tacho else '# tacho = "..."') + "   # a once-per-revolution channel, if any; "
              "tacho_pulses_per_rev = 1, tacho_shaft = \"pinion\"",

@@ -23,12 +23,24 @@ class InputError(GearpitError):
         self.field = field
         self.value = value
         self.allowed = allowed
-        super().__init__(f"{field}: got {value!r}; allowed: {allowed}")
+        super().__init__(f"{field}: got {_shown(value)}; allowed: {allowed}")
 
     def __reduce__(self):
         """Pickle by the three fields, so that the error crosses a process boundary (a worker of
         :func:`compare.attribution.attribute`) as itself rather than as a failure to unpickle it."""
         return type(self), (self.field, self.value, self.allowed)
+
+
+#: a table value whose repr is longer than this is shown by its keys only (a whole case dict is no message)
+MAX_TABLE_REPR = 160
+
+
+def _shown(value: object) -> str:
+    """How an error message shows a value: its repr, but a long table (dict) by its keys only."""
+    text = repr(value)
+    if isinstance(value, dict) and len(text) > MAX_TABLE_REPR:
+        return f"a table with keys {', '.join(map(str, value))}"
+    return text
 
 
 class DesignError(GearpitError):

@@ -46,7 +46,7 @@ MAX_REFERENCE_SPEED_OFFSET = 0.05
 def folder_files(folder: str | Path) -> tuple[list[Path], list[str]]:
     """``(files, skipped)``: the data files of ``folder`` to read (a sidecar beside them, or listed in
     ``labels.csv``: refused later by name), and one line per data file skipped (no sidecar, not listed)."""
-    from compare.measurement import find_sidecar
+    from compare.measurement import NoSidecarError, find_sidecar
 
     root = Path(folder)
     table = read_labels(root)
@@ -57,7 +57,7 @@ def folder_files(folder: str | Path) -> tuple[list[Path], list[str]]:
             continue
         try:
             find_sidecar(p)
-        except InputError:
+        except NoSidecarError:
             if p.name not in listed:
                 skipped.append(f"{p.name}: skipped (no sidecar beside it, and not in {LABELS_FILE})")
                 continue
@@ -67,11 +67,11 @@ def folder_files(folder: str | Path) -> tuple[list[Path], list[str]]:
 
 def _sidecar(f: Path):
     """The sidecar of ``f``; none: refused by name, a template written beside it (as ``gearpit compare`` does)."""
-    from compare.measurement import find_sidecar, load_measurement, read_sidecar
+    from compare.measurement import NoSidecarError, find_sidecar, load_measurement, read_sidecar
 
     try:
         path = find_sidecar(f)
-    except InputError:
+    except NoSidecarError:
         try:
             load_measurement(f)        # writes the template and says so
         except InputError as exc:

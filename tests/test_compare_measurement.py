@@ -104,7 +104,7 @@ def test_public_layouts_mcc5_phm_seu(tmp_path):
     head = "\n".join(f"description line {i}\tfree text" for i in range(16))
     body = "\n".join("\t".join(f"{v:.5f}" for v in row) + "\t" for row in rng.standard_normal((6000, 8)))
     se.write_text(head + "\n" + body + "\n")
-    m = load_measurement(se, Sidecar.from_dict({"pair": "spur-gds", "fs_hz": 5120.0, "torque_nm": 0.0}))
+    m = load_measurement(se, Sidecar.from_dict({"pair": "spur-gds", "fs_hz": 5120.0, "torque_nm": 1.0}))
     assert (m.speed_rpm, m.sensor, m.fault, m.n_samples) == (1500.0, "parallel_x", "surface", 6000)
 
 
@@ -161,6 +161,6 @@ def test_real_spectraquest_file_loads(tmp_path):
     if not f.exists():
         pytest.skip("shared data not present")
     m = load_measurement(f, Sidecar.from_dict({"pair": "spur-gds", "fs_hz": 20000.0, "speed_rpm": 1800.0,
-                                               "torque_nm": 0.0, "sensor": "a1"}))
+                                               "torque_nm": 1.0, "sensor": "a1"}))
     assert set(m.channels) == {"a1", "a2", "a3", "a4"} and m.n_samples == 88832
     assert float(np.std(m.signal)) == pytest.approx(5.946, abs=1e-3)

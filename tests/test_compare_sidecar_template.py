@@ -22,14 +22,15 @@ def test_a_missing_sidecar_leaves_a_template_that_loads_the_record_once_filled(t
     tpl = csv.with_name(csv.name + ".toml.template")
     assert str(tpl) in str(err.value) and tpl.is_file()
     text = tpl.read_text()
-    assert 'sensor = "acc_x"' in text and 'tacho = "tacho"' in text and "# fs_hz = 20000" in text
+    assert 'sensor = ""' in text and '"acc_x"' in text and 'tacho = "tacho"' in text and "# fs_hz = 20000" in text
     side = csv.with_suffix(".toml")
     side.write_text(text)                                 # saved unfilled: refused by the key
-    with pytest.raises(InputError, match="speed_rpm"):
+    with pytest.raises(InputError, match="pair"):      # the first of the keys left unfilled
         load_measurement(csv)
     filled = re.sub(r"^speed_rpm = \S+", "speed_rpm = 1000.0", text, flags=re.M)
     filled = re.sub(r"^torque_nm = \S+", "torque_nm = 50.0", filled, flags=re.M)
     filled = re.sub(r'^pair = "[^"]*"', 'pair = "spur-gds"', filled, flags=re.M)
+    filled = re.sub(r'^sensor = "[^"]*"', 'sensor = "acc_x"', filled, flags=re.M)
     side.write_text(filled)
     got = load_measurement(csv)
     assert got.sensor == "acc_x" and got.tacho == "tacho" and got.fs_hz == pytest.approx(m.fs_hz)

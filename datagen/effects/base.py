@@ -132,6 +132,8 @@ import numpy as np
 from datagen.effects.fit import Fit, resolve_fit
 from gearpit.errors import InputError
 
+#: the units of a dimensionless parameter, not written after its range in an error ("[0, 12]", not "[0, 12] -")
+DIMENSIONLESS_UNITS = ("", "-", "1")
 #: the contribution points, in simulation order (method names on :class:`Effect`)
 HOOKS = ("mesh_stiffness", "tooth_deviation_m", "angle_deviation_m", "centre_offset_m", "generalized_force",
          "mesh_force_batch", "operating_point", "output_path", "measurement")
@@ -241,7 +243,9 @@ class Effect:
                 continue
             ok = isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and lo <= v <= hi
             if not ok:
-                raise InputError(where, v, f"a number in [{lo}, {hi}] {f.metadata.get('unit', '')}".rstrip())
+                unit = f.metadata.get("unit", "")
+                shown = "" if unit in DIMENSIONLESS_UNITS else f" {unit}"
+                raise InputError(where, v, f"a number in [{lo}, {hi}]{shown}")
 
     # ------------------------------------------------------------------ description
     @classmethod

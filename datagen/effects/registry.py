@@ -102,18 +102,50 @@ def ensure_plugin(path: str | Path, sha256: str | None = None) -> tuple[str, str
 def load_plugin(path: str | Path) -> list[str]:
     """Import a user's Python file so that its ``@register`` effects join the registry.
 
-    Returns the names that the file added.
+    Returns the names that the file added. A file that cannot be imported (a syntax error, an exception or a
+    missing module at import) is refused with one line naming the file (and the line of a syntax error), and
+    whatever it registered before failing is removed again; a file that registers no effect is refused too (a
+    plugin without effects is always a mistake: a forgotten ``@register``).
     """
     p = Path(path)
     if not p.is_file() or p.suffix != ".py":
         raise InputError("plugin", str(p), "an existing .py file")
-    before = set(_REGISTRY)
+    before = dict(_REGISTRY)
     mod_name = f"gearpit_plugin_{p.stem}_{abs(hash(str(p.resolve()))) % 10**8}"
     spec = importlib.util.spec_from_file_location(mod_name, p)
     module = importlib.util.module_from_spec(spec)
     sys.modules[mod_name] = module
-    spec.loader.exec_module(module)
-    return sorted(set(_REGISTRY) - before)
+    try:
+        spec.loader.exec_module(module)
+    except Exception as exc:    # the user's code: any failure becomes one line naming the file
+        sys.modules.pop(mod_name, None)
+        _REGISTRY.clear()
+        _REGISTRY.update(before)
+        raise PluginError(p, exc) from None
+    if not any(c.__module__ == mod_name for c in _REGISTRY.values()):
+        sys.modules.pop(mod_name, None)
+        raise InputError(f"plugin {p.name}", str(p), "a file that registers at least one effect (it registers no "
+                                                      "effect: decorate an Effect subclass with @register)")
+    return sorted(set(_REGISTRY) - set(before))
+
+
+class PluginError(InputError):
+    """A plugin file that failed to import: one line naming the file, the line of a syntax error, and the error."""
+
+    def __init__(self, path: Path, exc: BaseException):
+        self.path, self.exc = Path(path), exc
+        self.field, self.value, self.allowed = "plugin", str(path), "a file that imports without error"
+        name = self.path.name
+        if isinstance(exc, InputError):          # a bad @register: its own message already says what is allowed
+            text = f"plugin {name}: {exc}"
+        elif isinstance(exc, SyntaxError):
+            text = f"plugin {name}: line {exc.lineno}: {exc.msg}"
+        else:
+            text = f"plugin {name}: raised {type(exc).__name__}: {exc} while loading"
+        ValueError.__init__(self, text)
+
+    def __reduce__(self):
+        return type(self), (self.path, self.exc)
 
 
 @dataclass(frozen=True)
