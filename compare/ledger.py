@@ -122,7 +122,8 @@ def make_row(comparison, attribution=None, *, run: int, measurement_path: str | 
     row = {"run": run, "time_utc": _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
            "measurement": str(measurement_path or ref.measurement.source),
            "measurement_sha256": file_sha256(measurement_path) if measurement_path else None,
-           "model": model.describe(), "effects": [e.to_dict() for e in model.effects],
+           "model": model.describe(), "description": model.description or None,
+           "effects": [e.to_dict() for e in model.effects],
            "speed_rpm": ref.speed.speed_rpm, "gain_db": comparison.evaluation.residuals.gain_db,
            "error_db": comparison.error_db, "raw_error_db": comparison.raw_error_db,
            "noise_error_db": comparison.noise_error_db, "claimed": None, "candidates": [],
@@ -208,15 +209,22 @@ def fit_provenance_warnings(row: dict, *, measurement_path: str | Path | None, m
 
 
 def history_table(rows: list[dict]) -> str:
-    """Plain-text table: run, model, total error and per view."""
+    """Plain-text table: run, model, total error and per view (and the model's description, shortened)."""
     views = ("order", "band", "envelope", "tsa", "stats")
     head = f"{'run':>3}  {'total dB':>8}  " + "  ".join(f"{v:>8}" for v in views) + "  model"
     lines = [head]
     for r in rows:
         e = r.get("error_db", {})
         vals = "  ".join(_cell(e.get(v)) for v in views)
-        lines.append(f"{r.get('run', 0):>3}  {_cell(e.get('total'))}  {vals}  {r.get('model', '')}")
+        note = f"  [{_short(r['description'])}]" if r.get("description") else ""
+        lines.append(f"{r.get('run', 0):>3}  {_cell(e.get('total'))}  {vals}  {r.get('model', '')}{note}")
     return "\n".join(lines)
+
+
+def _short(text: str, n: int = 40) -> str:
+    """The model's description in the table: one line, at most ``n`` characters."""
+    t = " ".join(str(text).split())
+    return t if len(t) <= n else t[:n - 3] + "..."
 
 
 def _cell(v) -> str:

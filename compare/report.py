@@ -67,7 +67,8 @@ def document(comparison, attribution=None, ledger_rows=(), *, measurement_path: 
                         "speed_search_fraction": _num(ref.speed.search_fraction), "torque_nm": m.torque_nm, "pair": m.pair.to_dict(),
                         "low_cut_hz": float(plan.low_cut_hz), "below_shafts_ratio": float(ref.below_shafts_ratio),
                         "clipping": dict(ref.clipping)},
-        "model": {"path": model_path, "description": comparison.model.describe(), "sensor": comparison.model.sensor,
+        "model": {"path": model_path, "description": comparison.model.describe(),
+                  "user_description": comparison.model.description or None, "sensor": comparison.model.sensor,
                   "effects": [e.to_dict() for e in comparison.model.effects]},
         "gain_db": g,
         "calibration": comparison.calibration.to_dict() if comparison.calibration is not None else None,
@@ -209,7 +210,9 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
                 f" (a {html.escape(m['sensor_quantity'])}, read as acceleration)") + ", "
              f"fs {m['fs_hz']:g} Hz, {m['n_samples']} samples; speed {m['speed_rpm']:.3f} rpm "
              f"(nominal {m['speed_rpm_nominal']:g}, refined from the {m['speed_method']}), torque {m['torque_nm']:g} N m.</p>",
-             f"<p>Model: <code>{html.escape(doc['model']['description'])}</code>. Sensor gain fitted: "
+             f"<p>Model: <code>{html.escape(doc['model']['description'])}</code>"
+             + (f" ({html.escape(doc['model']['user_description'])})" if doc['model'].get('user_description') else "")
+             + ". Sensor gain fitted: "
              f"{doc['gain_db']:+.2f} dB.</p>",
              *_pair_html(doc.get("pair_check")),
              *_below_shafts_html(comparison.reference),

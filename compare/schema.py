@@ -77,7 +77,11 @@ SCHEMA = {
                                                        "limits": {"type": "array", "items": {"type": "number"},
                                                                   "minItems": 2, "maxItems": 2}}}}},
         "model": {"type": "object", "required": ["description", "sensor", "effects"],
-                  "properties": {"path": STR, "description": {"type": "string"}, "sensor": {"type": "string"},
+                  "properties": {"path": STR, "description": {"type": "string"},
+                                 "user_description": {"type": ["string", "null"],
+                                                      "description": "the model file's own description key (free "
+                                                                     "text; also in the ledger rows)"},
+                                 "sensor": {"type": "string"},
                                  "effects": {"type": "array", "items": {"type": "object", "required": ["name"]}}}},
         "gain_db": {"type": "number", "description": "fitted sensor gain, model -> measurement"},
         "calibration": {

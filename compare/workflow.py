@@ -30,9 +30,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from compare.candidates import Attribution, AttributionSettings, within_noise
+from compare.calibration import calibration_message
 from compare.channels import resolution_message
 from compare.comparison import Comparison, below_shafts_message, prepare_reference
 from compare.escalation import compare_and_attribute, reason_text
+from compare.fitspace import CHAIN_EFFECTS
 from compare.joint_refit import joint_refit_message
 from compare.ledger import append_row, fit_provenance_warnings, last_fit, ledger_path, make_row, read_ledger
 from compare.measurement import find_sidecar, load_measurement
@@ -46,7 +48,7 @@ from compare.sideband_fit import sideband_fit_message
 from compare.speed import speed_message
 from datagen.effects import EffectSpec, get, load_plugin
 from gearpit.atomic import check_output_path
-from gearpit.errors import InputError
+from gearpit.errors import InputError, require
 
 
 @dataclass
@@ -96,8 +98,17 @@ def extend_model(model: ComparisonModel, add: list[str], rows: list[dict], messa
     """Apply ``--add`` items (module docstring). A fit taken from the ledger is named by its run and
     measurement, with a warning when that run's measurement or model differ from this comparison's."""
     as_loaded = model.describe()
+    named: set[str] = set()
     for item in add:
         name, params = parse_add(item)
+        require(name != "noise", "--add", item,
+                "an effect other than noise: every comparison matches the measurement's noise floor itself (the "
+                "model's noise is set from the floor between the orders)")
+        if name in named:
+            messages.append(f"--add {name} given again: this one replaces the earlier {name}")
+        elif name in model.effect_names:
+            messages.append(f"--add {name}: replaces the model's {name}")
+        named.add(name)
         if params is None:
             found = last_fit(rows, name)
             cls = get(name)
@@ -137,6 +148,24 @@ def run(measurement_path: str | Path, *, meta: str | Path | None = None, model_p
                            parallel=parallel, calibrate=calibrate, refit=refit)
 
 
+def candidate_notes(model: ComparisonModel, candidates: list[str]) -> list[str]:
+    """Check ``--candidates`` (each a registered effect, named as ``--candidates`` when not) and say which of them
+    the attribution does not try: the measurement chain's effects (:data:`compare.fitspace.CHAIN_EFFECTS`) and
+    the model's own."""
+    from datagen.effects import names
+
+    known = names()
+    notes = []
+    for c in candidates:
+        require(c in known, "--candidates", c, f"one of: {', '.join(sorted(known))}")
+        if c in CHAIN_EFFECTS:
+            notes.append(f"--candidates {c}: not tried (the measurement chain's effect, which every comparison "
+                         "matches itself)")
+        elif c in model.effect_names:
+            notes.append(f"--candidates {c}: not tried (already in the model; --refit {c} refits it)")
+    return notes
+
+
 def _run_locked(measurement, measurement_path, mpath: Path, *, add, plugins, attribution, candidates, report,
                 json_path, seed, settings, parallel, calibrate, refit) -> Outcome:
     """:func:`run` once the model's lock is held."""
@@ -153,8 +182,9 @@ def _run_locked(measurement, measurement_path, mpath: Path, *, add, plugins, att
     changed = bool(add) or bool(plugins) or not mpath.exists()
     model = extend_model(model, list(add), rows, messages, measurement_path=measurement_path)
     if candidates is not None:
-        for c in candidates:
-            get(c)
+        messages += candidate_notes(model, candidates)
+    if measurement.sidecar_path is not None:
+        messages.append(f"sidecar: {measurement.sidecar_path}")
     ref = prepare_reference(measurement)
     if (msg := speed_message(ref.speed)) is not None:
         messages.append(msg)
@@ -214,8 +244,7 @@ def _run_locked(measurement, measurement_path, mpath: Path, *, add, plugins, att
                             f"compare with --model {spath} to take it)")
     cal = comparison.calibration
     if cal is not None:
-        messages.append("nuisances calibrated: " + ", ".join(f"{k} {v:.4g}" for k, v in cal.values.items())
-                        + f" (error {cal.error_before_db:.2f} -> {cal.error_db:.2f} dB)")
+        messages.append(calibration_message(cal))
     if att is not None and att.resolution is not None:
         messages.append(resolution_message(att.resolution))
     if att is not None and att.claimed and att.claimed[0].joint_refit is not None:

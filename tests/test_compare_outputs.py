@@ -310,3 +310,49 @@ def test_add_warns_when_the_fit_is_from_another_measurement_or_model(rig):
     assert len(warn) == 2
     assert "run 1" in warn[0] and "another measurement" in warn[0] and "pitted.csv" in warn[0]
     assert "run 1" in warn[1] and "another model (tip_relief(x=1))" in warn[1] and "(baseline)" in warn[1]
+
+
+# ---------------------------------------------------------------------- --candidates, --add, description, sidecar
+def test_candidates_that_are_never_tried_are_named_and_a_typo_is_a_candidates_error():
+    from compare.model import ComparisonModel
+    from compare.workflow import candidate_notes
+
+    model = ComparisonModel.from_dict({"effects": [{"name": "pitch_error", "grade": 6.0}]})
+    notes = candidate_notes(model, ["noise", "pitch_error", "tip_relief"])
+    assert len(notes) == 2 and "noise: not tried" in notes[0] and "pitch_error: not tried" in notes[1]
+    with pytest.raises(InputError) as err:
+        candidate_notes(model, ["tip_releif"])
+    assert err.value.field == "--candidates" and "tip_relief" in err.value.allowed
+
+
+def test_add_twice_says_it_replaces_and_add_noise_is_refused():
+    from compare.model import ComparisonModel
+    from compare.workflow import extend_model
+
+    msgs: list[str] = []
+    model = extend_model(ComparisonModel.from_dict({}), ["pitch_error:grade=8", "pitch_error:grade=7"], [], msgs)
+    assert [e.to_dict()["grade"] for e in model.effects] == [7.0]
+    assert any("given again: this one replaces" in m for m in msgs)
+    with pytest.raises(InputError) as err:
+        extend_model(model, ["noise:snr_db=20"], [], [])
+    assert err.value.field == "--add" and "noise floor" in err.value.allowed
+
+
+def test_the_models_description_reaches_ledger_cli_table_json_and_report(rig):
+    """The model file's free-text description ("shown in the ledger") was shown nowhere; HTML in it is escaped."""
+    from compare.ledger import history_table, ledger_path, read_ledger
+    from compare.workflow import run
+
+    csv = rig / "rig.csv"
+    model = csv.parent / "described.model.toml"
+    model.write_text('description = "<b>rig A</b>, first guess"\n')
+    out = run(csv, model_path=model, attribution=False, json_path=csv.parent / "d.json",
+              report=csv.parent / "d.html", calibrate=False)
+    rows = read_ledger(ledger_path(model))
+    assert rows[-1]["description"] == "<b>rig A</b>, first guess"
+    assert "[<b>rig A</b>, first guess]" in history_table(rows)
+    doc = json.loads((csv.parent / "d.json").read_text())
+    assert doc["model"]["user_description"] == "<b>rig A</b>, first guess"
+    html = (csv.parent / "d.html").read_text()
+    assert "&lt;b&gt;rig A&lt;/b&gt;" in html and "<b>rig A</b>" not in html
+    assert any(m.startswith("sidecar: ") and m.endswith(".toml") for m in out.messages)
