@@ -149,3 +149,16 @@ def test_bore_error_in_mm_with_path():
     with pytest.raises(InputError) as exc:
         sweep_from_dict(_sweep("sweep", "pairs", [{"preset": "spur-gds", "helix_angle_deg": 60}]))
     assert exc.value.field == "sweep.pairs[0].helix_angle_deg"
+
+
+def test_tooth_and_depth_flags_without_a_mask_or_photo_are_refused(tmp_path, capsys):
+    """--tooth 3 and --depth-mm 0.3 apply to --mask/--photo only; given with --pits or no pit source they were
+    silently ignored. Now refused before any work, nothing written."""
+    out = tmp_path / "o"
+    pits = tmp_path / "pits.toml"
+    pits.write_text('[pits]\nshape = "ellipse"\nteeth = [0]\nseverity = 0.1\n')
+    for extra in (["--tooth", "3"], ["--depth-mm", "0.3"], ["--pits", str(pits), "--tooth", "3"]):
+        assert main(["stiffness", *extra, "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert ("--tooth" in err or "--depth-mm" in err) and "only with --mask or --photo" in err
+    assert not out.exists()

@@ -22,13 +22,15 @@ def register(sub) -> None:
     p = sub.add_parser("stiffness", help="time-varying mesh stiffness over a revolution (CSV, PNG, JSON)",
                        description=__doc__)
     src = p.add_mutually_exclusive_group()
-    src.add_argument("--preset", default="spur-gds", help=f"preset pair: {', '.join(sorted(PRESETS))}")
+    src.add_argument("--preset", default="spur-gds",
+                     help=f"preset pair (default spur-gds): {', '.join(sorted(PRESETS))}")
     src.add_argument("--pair", type=Path, help="gear pair TOML ([pair] table, units in key names)")
     p.add_argument("--pits", type=Path, help="TOML with a [pits] table (shape, teeth, severity, depth_mm, seed)")
     p.add_argument("--mask", type=Path, help="pit mask PNG of one tooth (painted: white = pit, or 16-bit depth in um)")
     p.add_argument("--photo", type=Path, help="photo of a flank; the pit mask is extracted from it")
-    p.add_argument("--tooth", type=int, default=0, help="tooth that --mask/--photo applies to (default 0)")
-    p.add_argument("--depth-mm", type=float, default=0.2, help="pit depth for --photo / binary --mask (mm, 0.001 .. 5)")
+    p.add_argument("--tooth", type=int, default=None, help="tooth that --mask/--photo applies to (default 0)")
+    p.add_argument("--depth-mm", type=float, default=None,
+                   help="pit depth for --photo / binary --mask (mm, 0.001 .. 5; default 0.2)")
     p.add_argument("--gear", choices=["pinion", "wheel"], default="pinion", help="gear that carries the pits")
     p.add_argument("--grid", default="219x1000", help="flank grid ROWSxCOLS (profile x face), default 219x1000")
     p.add_argument("--positions-per-cycle", type=int, default=64)
@@ -48,10 +50,19 @@ def parse_grid(text: str) -> tuple[int, int]:
     return rows, cols
 
 
+#: pit depth of a --photo or binary --mask pit map when --depth-mm is not given (mm)
+DEFAULT_DEPTH_MM = 0.2
+
+
 def build_pits(args, pair):
     """The pit map the arguments describe (None for a healthy pair); validates everything first."""
     given = [a for a in ("pits", "mask", "photo") if getattr(args, a) is not None]
     require(len(given) <= 1, "--pits/--mask/--photo", given, "at most one pit source")
+    for flag, value in (("--tooth", args.tooth), ("--depth-mm", args.depth_mm)):
+        require(value is None or given[:1] in (["mask"], ["photo"]), flag, value,
+                "only with --mask or --photo (a --pits file states its own teeth and depth_mm)")
+    args.tooth = 0 if args.tooth is None else args.tooth
+    args.depth_mm = DEFAULT_DEPTH_MM if args.depth_mm is None else args.depth_mm
     if not given:
         return None
     rows, cols = parse_grid(args.grid)
