@@ -32,7 +32,10 @@ def write_template(measurement_path: str | Path) -> Path | None:
     except (GearpitError, OSError, ValueError):
         return None
     names = list(rec.names)
-    tacho = next((n for n in names if "tach" in n.lower() or "rpm" in n.lower() or "key" in n.lower()), None)
+    # a pulse channel by its name: tach/key/pulse first, "rpm" only after (gearpit simulate writes both
+    # tacho_pinion and speed_pinion_rpm, a speed signal, not pulses)
+    tacho = next((n for words in (("tach", "key", "pulse"), ("rpm",)) for n in names
+                  if any(w in n.lower() for w in words)), None)
     sensor = next((n for n in names if n != tacho), names[0])
     fs = rec.fs_hz if rec.fs_hz is not None else rec.hints.get("fs_hz")
     lines = [f"# sidecar of {p.name}, written by gearpit because none was found beside it: fill it in and save it",

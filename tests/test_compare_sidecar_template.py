@@ -49,3 +49,18 @@ def test_no_template_over_an_existing_one_or_for_an_unreadable_file(tmp_path):
     with pytest.raises(InputError) as err:
         load_measurement(good)
     assert "template" not in str(err.value) and (tmp_path / "y.csv.toml.template").read_text() == "mine\n"
+
+
+def test_the_template_takes_a_pulse_channel_for_the_tacho_not_a_speed_signal(tmp_path):
+    """gearpit simulate's CSV holds speed_pinion_rpm (a speed) before tacho_pinion (pulses): the template named the
+    speed signal as the tachometer; now the pulse channel."""
+    import numpy as np
+
+    from compare.sidecar_template import write_template
+
+    csv = tmp_path / "case.csv"
+    t = np.arange(2000) / 1e4
+    np.savetxt(csv, np.column_stack([t, np.sin(t), 1000 + 0 * t, (np.mod(t * 16.7, 1) < 0.05).astype(float)]),
+               delimiter=",", header="time_s,acc_pinion_loa_m_s2,speed_pinion_rpm,tacho_pinion", comments="")
+    text = write_template(csv).read_text()
+    assert 'tacho = "tacho_pinion"' in text and 'tacho = "speed_pinion_rpm"' not in text
