@@ -51,6 +51,7 @@ from datagen.case_options import (OperatingPoint, SolverOptions, StiffnessOption
                                   auto_positions_per_cycle, options_from_table)
 from datagen.mesh_excitation import mesh_record
 from datagen.plausibility import record_warnings
+from datagen.stiffness_limits import check_case_record
 from gearpit import __version__
 from gearpit.errors import require, require_positive
 from gearpit.tomlio import check_keys, read_toml
@@ -118,36 +119,10 @@ class Case:
         require(isinstance(self.stiffness, StiffnessOptions), "stiffness", type(self.stiffness).__name__,
                 "a StiffnessOptions (a dict of its fields: StiffnessOptions(**d))")
         object.__setattr__(self, "effects", build_effects(self.effects))
-        self._check_stiffness_record()
+        check_case_record(self)
         stepped = [e.name for e in self.effects if e.is_nonlinear or e.is_nonstationary]
         require(not (stepped and self.solver.method == "periodic"), "solver.method", self.solver.method,
                 f"'auto' or 'transient' with effects {stepped} (nonlinear or non-stationary: no periodic steady state)")
-
-    def _check_stiffness_record(self) -> None:
-        """The stiffness options against the pair and the pits, before any work: enough slices for a helical pair,
-        and a record that fits :data:`datagen.stiffness.STIFFNESS_BUDGET_BYTES` to compute (pits drawn by an
-        effect count as one more pitted tooth on its gear)."""
-        from datagen.stiffness_limits import min_n_slices, require_n_slices, require_record_fits
-
-        so = self.stiffness
-        if so.n_slices is not None:
-            require_n_slices(self.pair, so.n_slices, "stiffness.n_slices")
-        pitted, cols = {}, None
-        if isinstance(self.pits, PitMap) and self.pits.pitted_teeth:
-            pitted, cols = {self.pits.gear: len(self.pits.pitted_teeth)}, self.pits.grid.n_face
-        elif self.pits is not None and not isinstance(self.pits, PitMap):
-            pitted, cols = {self.pit_gear: sum(1 for v in self.pits.severity if v > 0)}, self.pit_grid[1]
-        for e in self.effects:
-            if getattr(e, "rebuilds_stiffness", False) and getattr(e, "gear", None) in ("pinion", "wheel"):
-                pitted[e.gear] = pitted.get(e.gear, 0) + 1
-        n_slices = so.n_slices
-        if n_slices is None:
-            from datagen.stiffness import default_n_slices
-
-            n_slices = max(cols, min_n_slices(self.pair)) if cols else default_n_slices(self.pair)
-        ppc = so.positions_per_cycle or auto_positions_per_cycle(
-            self.fs_hz, self.pair.mesh_frequency_hz(self.operating.speed_rpm))
-        require_record_fits(self.pair, ppc, n_slices, pitted, "stiffness.positions_per_cycle")
 
     # ------------------------------------------------------------------ file boundary
     @classmethod

@@ -86,3 +86,30 @@ def require_record_fits(pair, positions_per_cycle: int, n_slices: int, pitted_te
             f"an integer in [4, {max(top, 4)}] for pair {pair.name} with {n_slices} slices and {pits}: "
             f"{positions_per_cycle} positions would need ~{need / 1e9:.1f} GB to compute "
             f"(budget {STIFFNESS_BUDGET_BYTES / 1e9:g} GB)")
+
+
+def check_case_record(case) -> None:
+    """A :class:`datagen.simulate.Case`'s stiffness options against its pair and pits, before any work: enough
+    slices for a helical pair, and a record that fits :data:`STIFFNESS_BUDGET_BYTES` to compute (pits drawn by an
+    effect count as one more pitted tooth on its gear)."""
+    from datagen.case_options import auto_positions_per_cycle
+    from datagen.flank import PitMap
+    from datagen.stiffness import default_n_slices
+
+    so = case.stiffness
+    if so.n_slices is not None:
+        require_n_slices(case.pair, so.n_slices, "stiffness.n_slices")
+    pitted, cols = {}, None
+    if isinstance(case.pits, PitMap) and case.pits.pitted_teeth:
+        pitted, cols = {case.pits.gear: len(case.pits.pitted_teeth)}, case.pits.grid.n_face
+    elif case.pits is not None and not isinstance(case.pits, PitMap):
+        pitted, cols = {case.pit_gear: sum(1 for v in case.pits.severity if v > 0)}, case.pit_grid[1]
+    for e in case.effects:
+        if getattr(e, "rebuilds_stiffness", False) and getattr(e, "gear", None) in ("pinion", "wheel"):
+            pitted[e.gear] = pitted.get(e.gear, 0) + 1
+    n_slices = so.n_slices
+    if n_slices is None:
+        n_slices = max(cols, min_n_slices(case.pair)) if cols else default_n_slices(case.pair)
+    ppc = so.positions_per_cycle or auto_positions_per_cycle(
+        case.fs_hz, case.pair.mesh_frequency_hz(case.operating.speed_rpm))
+    require_record_fits(case.pair, ppc, n_slices, pitted, "stiffness.positions_per_cycle")
