@@ -181,14 +181,23 @@ def _refined(a: np.ndarray, fs_hz: float, harm: list[int], f0: float) -> float:
     return float(res.x)
 
 
-def mesh_line_stands_out(x: np.ndarray, fs_hz: float, fm_hz: float) -> tuple[float, float, float]:
-    """``(all_db, median_db, odd_db)``: how far the harmonic family at ``fm_hz`` stands out of the families beside
-    it (:func:`compare.pair_check.mesh_line_db`): on all its harmonics as the pair check reads it, on their median,
-    and on its odd ones (their median)."""
-    from compare.pair_check import PAD, mesh_line_db
+def record_spectrum(x: np.ndarray) -> tuple[np.ndarray, int]:
+    """The record's padded log power spectrum the mesh-line tests read (:func:`models.unknown_rate.log_power` at
+    :data:`compare.pair_check.PAD`): computed once per search and passed to them."""
+    from compare.pair_check import PAD
     from models.unknown_rate import log_power
 
-    logp, n_fft = log_power(np.asarray(x, dtype=float), PAD)
+    return log_power(np.asarray(x, dtype=float), PAD)
+
+
+def mesh_line_stands_out(x: np.ndarray, fs_hz: float, fm_hz: float, *,
+                         spectrum: tuple[np.ndarray, int] | None = None) -> tuple[float, float, float]:
+    """``(all_db, median_db, odd_db)``: how far the harmonic family at ``fm_hz`` stands out of the families beside
+    it (:func:`compare.pair_check.mesh_line_db`): on all its harmonics as the pair check reads it, on their median,
+    and on its odd ones (their median). ``spectrum``: :func:`record_spectrum` of ``x``, if already computed."""
+    from compare.pair_check import mesh_line_db
+
+    logp, n_fft = spectrum if spectrum is not None else record_spectrum(x)
     f = fm_hz / fs_hz
     return (mesh_line_db(logp, n_fft, f), mesh_line_db(logp, n_fft, f, quantile=0.5),
             mesh_line_db(logp, n_fft, f, odd=True, quantile=0.5))
@@ -214,7 +223,8 @@ def spectrum_speed(x: np.ndarray, fs_hz: float, *, z_pinion: int, z_wheel: int, 
     est = speed_from_spectrum(x, fs_hz, search_fraction=SEARCH_FRACTION, **kw)
     est = SpeedEstimate(est.speed_rpm, est.nominal_rpm, est.method, est.track, search_fraction=SEARCH_FRACTION)
     a = np.asarray(x, float) - np.mean(x)
-    if not _on_edge(est, SEARCH_FRACTION) and is_mesh_line(a, fs_hz, z_pinion * est.fr_pinion_hz, z_pinion, z_wheel):
+    if not _on_edge(est, SEARCH_FRACTION) and is_mesh_line(a, fs_hz, z_pinion * est.fr_pinion_hz, z_pinion, z_wheel,
+                                                           spectrum=record_spectrum(a)):
         return est
     return widened_speed(x, fs_hz, z_wheel=z_wheel, **kw) or est
 
@@ -224,8 +234,9 @@ def widened_speed(x: np.ndarray, fs_hz: float, *, z_pinion: int, z_wheel: int,
     """The speed searched within :data:`WIDE_SEARCH_FRACTION` of ``nominal_rpm``: the first of its harmonic sum's
     :data:`N_PEAKS` highest maxima, ranked by how far their family stands out, that lies inside the search, has two odd
     harmonics below 0.45 fs, stands out on all its harmonics (:data:`compare.pair_check.MESH_FAMILY_DB`) and on its
-    odd ones (:data:`ODD_LINE_DB`), it is the strongest harmonic family (the harmonic sum's maximum) within
-    :data:`NEIGHBOURS` pinion orders of it, and the sideband family around it is no other gear's
+    odd ones (:data:`ODD_LINE_DB`), its line is the strongest within :data:`NEIGHBOURS` pinion orders on
+    :data:`LOCAL_MAXIMUM_SHARE` of its harmonics (:func:`local_maximum_share`), and the sideband family around it is
+    no other gear's
     (:func:`compare.pair_check.sideband_family`): a record with a local fault holds every order of its shaft, and
     ``k fr`` for any ``k`` near ``z1`` is a harmonic family that stands out; the mesh is the strongest of them
     (a broken tooth of the helical rig searched below its speed: ``16 fr`` stands out by 28 dB and its sidebands
@@ -235,11 +246,12 @@ def widened_speed(x: np.ndarray, fs_hz: float, *, z_pinion: int, z_wheel: int,
         a, harm, maxima = _comb_maxima(x, fs_hz, fm0, WIDE_SEARCH_FRACTION, 10, N_PEAKS)
     except InputError:      # no mesh harmonic below 0.45 fs at the widened search's top
         return None
-    for f0 in sorted(maxima, key=lambda f: -mesh_line_stands_out(a, fs_hz, f)[0]):
+    spectrum = record_spectrum(a)
+    for f0 in sorted(maxima, key=lambda f: -mesh_line_stands_out(a, fs_hz, f, spectrum=spectrum)[0]):
         fm_hz = _refined(a, fs_hz, harm, f0)
         if abs(fm_hz / fm0 - 1.0) >= EDGE_FRACTION * WIDE_SEARCH_FRACTION or 3.0 * fm_hz >= 0.45 * fs_hz:
             continue
-        if not is_mesh_line(a, fs_hz, fm_hz, z_pinion, z_wheel, strict=True):
+        if not is_mesh_line(a, fs_hz, fm_hz, z_pinion, z_wheel, strict=True, spectrum=spectrum):
             continue
         rpm = 60.0 * fm_hz / z_pinion
         return SpeedEstimate(rpm, nominal_rpm, "spectrum", constant_track(a.size, fs_hz, rpm / 60.0),
@@ -248,31 +260,34 @@ def widened_speed(x: np.ndarray, fs_hz: float, *, z_pinion: int, z_wheel: int,
 
 
 def is_mesh_line(a: np.ndarray, fs_hz: float, fm_hz: float, z_pinion: int, z_wheel: int, *,
-                  strict: bool = False) -> bool:
+                 strict: bool = False, spectrum: tuple[np.ndarray, int] | None = None) -> bool:
     """Whether ``fm_hz`` is the mesh line (:func:`widened_speed`'s tests; ``strict``: also the median of its
-    harmonics and of its odd ones stand out, which the first search does not require of a quiet pair)."""
+    harmonics and of its odd ones stand out, which the first search does not require of a quiet pair;
+    ``spectrum``: :func:`record_spectrum` of ``a``, if already computed)."""
     from compare.pair_check import MESH_FAMILY_DB, sideband_family
 
-    all_db, median_db, odd_db = mesh_line_stands_out(a, fs_hz, fm_hz)
+    spectrum = spectrum if spectrum is not None else record_spectrum(a)
+    all_db, median_db, odd_db = mesh_line_stands_out(a, fs_hz, fm_hz, spectrum=spectrum)
     if all_db < MESH_FAMILY_DB or (strict and (median_db < MESH_FAMILY_DB or odd_db < ODD_LINE_DB)):
         return False
-    if local_maximum_share(a, fs_hz, fm_hz, z_pinion) < LOCAL_MAXIMUM_SHARE:
+    if local_maximum_share(a, fs_hz, fm_hz, z_pinion, spectrum=spectrum) < LOCAL_MAXIMUM_SHARE:
         return False
     family = sideband_family(a, fm_hz / fs_hz, z_pinion, z_wheel)
     return family is None or not family["other_family"]
 
 
-def local_maximum_share(a: np.ndarray, fs_hz: float, fm_hz: float, z_pinion: int, *, n_harmonics: int = 10) -> float:
+def local_maximum_share(a: np.ndarray, fs_hz: float, fm_hz: float, z_pinion: int, *, n_harmonics: int = 10,
+                        spectrum: tuple[np.ndarray, int] | None = None) -> float:
     """The share of the harmonics of ``fm_hz`` below 0.45 fs (at most ``n_harmonics``) whose line is the strongest
     within :data:`NEIGHBOURS` pinion orders of it (``fm_hz / z_pinion`` each; the line: the peak of the 4-times
     padded spectrum within one bin of the harmonic; its neighbours: the peak over the rest of the window beyond
     half an order). A mesh harmonic outweighs its sidebands; in a record with a local fault every pinion order is a
     line, and a family at ``(z1 +/- k) fr`` is made of sidebands, each the strongest of its neighbourhood about as
-    often as any of them. A vote, not a power sum: one harmonic on a housing resonance leads a power sum."""
+    often as any of them. A vote, not a power sum: one harmonic on a housing resonance leads a power sum.
+    ``spectrum``: :func:`record_spectrum` of ``a``, if already computed."""
     from compare.pair_check import PAD
-    from models.unknown_rate import log_power
 
-    logp, n_fft = log_power(a, PAD)
+    logp, n_fft = spectrum if spectrum is not None else record_spectrum(a)
     order = fm_hz / z_pinion * n_fft / fs_hz           # one pinion order, in padded bins
     half, reach = max(PAD + 1, int(0.5 * order)), int(NEIGHBOURS * order)
     votes = []
