@@ -5,6 +5,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 
 from datagen.geometry import FIELD_RANGES, Gear, GearPair, Material, preset
@@ -86,12 +87,31 @@ def pair_from_dict(d: dict, where: str = "pair") -> GearPair:
         mat = Material(youngs_modulus_pa=_num(m, "youngs_modulus_gpa", f"{where}.material", 210.0),
                        poisson=_num(m, "poisson", f"{where}.material", 0.3),
                        density_kg_m3=_num(m, "density_kg_m3", f"{where}.material", 7850.0))
-        return GearPair(pinion=gears["pinion"], wheel=gears["wheel"], material=mat,
+        pair = GearPair(pinion=gears["pinion"], wheel=gears["wheel"], material=mat,
                         name=str(merged.get("name", "custom")), **kwargs)
     except (InputError, DesignLimitError) as e:      # the checks of the SI objects, named as the file names them
         raise _as_written(e, where) from None
     except DesignError as e:
         raise DesignError(f"{where}: {e}") from None
+    if "preset" in d and "name" not in d:
+        pair = replace(pair, name=_overridden_name(d["preset"], base, pair))
+    return pair
+
+
+def _overridden_name(preset_name: str, base: dict, pair: GearPair) -> str:
+    """The name of a preset with overrides: the preset's own when nothing changed, else ``preset[key=value,...]``
+    listing every key (as the file writes it) whose value differs, so that two pairs made from one preset never
+    share a name (class keys, dataset indexes and model specs tell pairs apart by it)."""
+    got = pair.to_dict()
+    diffs = []
+    for key, value in got.items():
+        if key == "name":
+            continue
+        if isinstance(value, dict):
+            diffs += [f"{key}.{k}={v:g}" for k, v in value.items() if base.get(key, {}).get(k) != v]
+        elif base.get(key) != value:
+            diffs.append(f"{key}={value:g}")
+    return f"{preset_name}[{','.join(diffs)}]" if diffs else preset_name
 
 
 def _as_written(e, where: str):

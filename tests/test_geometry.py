@@ -93,3 +93,15 @@ def test_toml_round_trip_and_unknown_key(tmp_path):
     f.write_text('[pair\n')
     with pytest.raises(InputError, match="valid TOML"):
         load_pair(f)
+
+
+def test_preset_with_overrides_gets_its_own_name():
+    """A pair made from a preset with a changed key must not carry the preset's name: sweeps key their classes and
+    models check pairs by it, so ``spur-gds`` with a 15 deg helix would have been taken for ``spur-gds``."""
+    helical = pair_from_dict({"preset": "spur-gds", "helix_angle_deg": 15})
+    assert helical.name == "spur-gds[helix_angle_deg=15]"
+    assert helical.helix_angle_rad == pytest.approx(math.radians(15))
+    nested = pair_from_dict({"preset": "spur-gds", "pinion": {"teeth": 30}, "material": {"youngs_modulus_gpa": 200}})
+    assert nested.name == "spur-gds[pinion.teeth=30,material.youngs_modulus_gpa=200]"
+    assert pair_from_dict({"preset": "spur-gds", "helix_angle_deg": 0}) == preset("spur-gds")   # no change: same pair
+    assert pair_from_dict({"preset": "spur-gds", "name": "rig 2", "helix_angle_deg": 15}).name == "rig 2"
