@@ -193,9 +193,13 @@ class ComparisonModel:
         """Write the TOML form atomically (to ``path`` or where it was loaded from)."""
         p = Path(path) if path is not None else self.path
         require(p is not None, "model path", None, "a file to write the model to")
+        text = None
+        if self.path is not None and p.exists() and p.resolve() == Path(self.path).resolve():
+            text = _merged_text(p, self.to_dict())      # the user's file, comments and layout kept
+        if text is None:
+            text = "# gearpit comparison model (gearpit compare --model); edit freely\n" + to_toml(self.to_dict())
         with atomic_path(p) as tmp:
-            tmp.write_text("# gearpit comparison model (gearpit compare --model); edit freely\n" + to_toml(self.to_dict()),
-                           encoding="utf-8")
+            tmp.write_text(text, encoding="utf-8")
         return p
 
     # ------------------------------------------------------------------ simulation
@@ -230,6 +234,57 @@ def parse_add(text: str):
         return name.strip(), None
     spec = EffectSpec.from_string(text)
     return spec.name, dict(spec.params)
+
+
+# ---------------------------------------------------------------------- rewriting the user's file
+def _merged_text(path: Path, new: dict) -> str | None:
+    """The model file at ``path`` with its values brought to ``new`` (the model's TOML form), its comments, key
+    order and layout kept: an ``--add`` rewrites the file the user edits, and must not throw away their notes.
+    Tables are merged key by key, ``[[effects]]`` entries by effect name. ``None`` when the file cannot be read
+    as TOML (the caller then writes it afresh)."""
+    import tomlkit
+
+    try:
+        doc = tomlkit.parse(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomlkit.exceptions.TOMLKitError):
+        return None
+    _merge_table(doc, new)
+    return tomlkit.dumps(doc)
+
+
+def _is_table_array(v) -> bool:
+    return isinstance(v, list) and bool(v) and all(isinstance(x, dict) for x in v)
+
+
+def _merge_table(table, new: dict) -> None:
+    import tomlkit
+
+    for key in [k for k in table if k not in new]:
+        del table[key]
+    for key, value in new.items():
+        old = table.get(key)
+        if key == "effects" and not value:
+            if old is not None:
+                del table[key]
+            continue
+        if old is not None and isinstance(value, dict) and isinstance(old, dict):
+            _merge_table(old, value)
+        elif old is not None and _is_table_array(value) and isinstance(old, list) and all(isinstance(x, dict) for x in old):
+            by_name = {x.get("name"): x for x in old}
+            aot = tomlkit.aot()
+            for item in value:
+                kept = by_name.get(item.get("name"))
+                if kept is None:
+                    kept = tomlkit.table()
+                _merge_table(kept, item)
+                aot.append(kept)
+            table[key] = aot
+        elif old is None or _plain(old) != value:
+            table[key] = value
+
+
+def _plain(v):
+    return v.unwrap() if hasattr(v, "unwrap") else v
 
 
 # ---------------------------------------------------------------------- TOML writing (the subset we emit)

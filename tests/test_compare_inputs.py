@@ -102,6 +102,37 @@ def test_model_stores_plugin_relative_to_its_folder(tmp_path):
         unregister("inputs_runout2")
 
 
+def test_model_rewrite_keeps_the_users_comments(tmp_path):
+    """``--add`` rewrites the model file the user edits: their comments, key order and untouched values must
+    survive, changed values change, a new effect is appended and a removed one goes (the file was written afresh
+    before, losing every comment)."""
+    from compare.model import ComparisonModel
+    from datagen.effects import build_effects
+
+    p = tmp_path / "rig.model.toml"
+    p.write_text("# rig A, bay 3\n"
+                 "description = \"rig A\"  # first guess\n"
+                 "sensor = \"acc_pinion_loa_m_s2\"\n\n"
+                 "[drivetrain]\n# from the rig drawing\nmesh_damping_ratio = 0.07\n\n"
+                 "[[effects]]\n# dial gauge, 2026-11\nname = \"eccentricity_pinion\"\namplitude_m = 2e-05\n")
+    m = ComparisonModel.load(p)
+    ecc, tip = build_effects([{"name": "eccentricity_pinion", "amplitude_m": 3e-5},
+                              {"name": "tip_relief", "amount_m": 1e-5}])
+    m.with_effect(ecc).with_effect(tip).with_drivetrain({"bearing_n_per_m": 2e8}).save()
+    text = p.read_text()
+    for kept in ("# rig A, bay 3", "# first guess", "# from the rig drawing", "# dial gauge, 2026-11"):
+        assert kept in text
+    back = ComparisonModel.load(p)
+    assert back.effect_names == ("eccentricity_pinion", "tip_relief")
+    assert back.effects[0].params()["amplitude_m"] == 3e-5
+    assert back.tables["drivetrain"] == {"mesh_damping_ratio": 0.07, "bearing_n_per_m": 2e8}
+    assert text.index("# dial gauge") < text.index("amplitude_m = 3e-05")      # the comment stays with its effect
+    back.__class__.from_dict({**back.to_dict(), "effects": back.to_dict()["effects"][1:]}, path=p).save()
+    again = p.read_text()
+    assert "eccentricity_pinion" not in again and "tip_relief" in again and "# from the rig drawing" in again
+    assert ComparisonModel.load(p).effect_names == ("tip_relief",)
+
+
 # ---------------------------------------------------------------------- sidecars
 SIM_META = {"case": {"duration_s": 1.0, "fs_hz": 20000.0,
                      "pair": {"name": "spur-gds", "module_n_mm": 2.0, "pressure_angle_n_deg": 20.0,
