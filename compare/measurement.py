@@ -13,8 +13,15 @@ key                        required  meaning
 ``sensor``                 [2]_      the vibration channel: name or 0-based column index
 ``sensor_quantity``        no        what the sensor measures: ``"acceleration"`` (default),
                                      ``"velocity"`` or ``"displacement"`` (read as acceleration:
-                                     :func:`features.derivative.derivative`, any unit: the gain
-                                     is fitted)
+                                     :func:`features.derivative.derivative`)
+``sensor_unit``            no        the unit of the sensor channel's numbers (:mod:`compare.sensor_units`):
+                                     a unit of ``sensor_quantity`` (``"m/s^2"``, ``"mm/s^2"``, ``"g"``;
+                                     ``"m/s"``, ``"mm/s"``, ``"in/s"``; ``"m"``, ``"mm"``, ``"um"``) or
+                                     ``"V"``, ``"mV"``, ``"counts"``, ``"fullscale"`` with the two keys
+                                     below; brought to SI here. None: the numbers as they are
+``sensor_sensitivity``     no        with a signal unit: the file's units per one
+                                     ``sensor_sensitivity_unit`` (100 mV/g in mV: ``100``, ``"g"``)
+``sensor_sensitivity_unit`` no       a unit of ``sensor_quantity`` (above)
 ``tacho``                  no        tachometer channel (name or index); none: speed from the spectrum
 ``tacho_pulses_per_rev``   no        pulses per revolution of ``tacho_shaft`` (default 1)
 ``tacho_shaft``            no        ``"pinion"`` (default) or ``"wheel"``
@@ -52,11 +59,13 @@ from typing import Any
 import numpy as np
 
 from compare.formats import FORMATS, read_record
+from compare.sensor_units import check_sensor_unit, unit_factor
 from gearpit.errors import InputError, require, require_positive
 from gearpit.tomlio import check_keys, read_toml
 
-SIDECAR_KEYS = ("fs_hz", "speed_rpm", "torque_nm", "pair", "sensor", "sensor_quantity", "tacho", "tacho_pulses_per_rev",
-                "tacho_shaft", "fault", "channels", "time_column", "variable", "format", "start_s", "duration_s",
+SIDECAR_KEYS = ("fs_hz", "speed_rpm", "torque_nm", "pair", "sensor", "sensor_quantity", "sensor_unit",
+                "sensor_sensitivity", "sensor_sensitivity_unit", "tacho", "tacho_pulses_per_rev", "tacho_shaft",
+                "fault", "channels", "time_column", "variable", "format", "start_s", "duration_s",
                 "secondary", "reference")
 SIDECAR_SUFFIXES = (".toml", ".json", ".meta.toml", ".meta.json")
 MIN_REVOLUTIONS = 2.0
@@ -77,6 +86,10 @@ class Sidecar:
     fs_hz: float | None = None
     sensor: str | int | None = None
     sensor_quantity: str = "acceleration"
+    #: the unit of the sensor's numbers (:mod:`compare.sensor_units`); None: not declared
+    sensor_unit: str | None = None
+    sensor_sensitivity: float | None = None
+    sensor_sensitivity_unit: str | None = None
     tacho: str | int | None = None
     tacho_pulses_per_rev: int = 1
     tacho_shaft: str = "pinion"
@@ -137,12 +150,23 @@ class Sidecar:
             require(d["sensor_quantity"] in SENSOR_QUANTITIES, f"{where}.sensor_quantity", d["sensor_quantity"],
                     "one of: " + ", ".join(SENSOR_QUANTITIES))
             kw["sensor_quantity"] = d["sensor_quantity"]
+        unit_keys = ("sensor_unit", "sensor_sensitivity", "sensor_sensitivity_unit")
+        check_sensor_unit(*(d.get(k) for k in unit_keys), kw.get("sensor_quantity", "acceleration"), where)
+        kw.update({k: (float(d[k]) if k == "sensor_sensitivity" else d[k]) for k in unit_keys if k in d})
         if "format" in d:
             require(d["format"] in FORMATS, f"{where}.format", d["format"], "one of: " + ", ".join(FORMATS))
             kw["format"] = d["format"]
         if "secondary" in d:
             kw["secondary"] = _secondary(d["secondary"], f"{where}.secondary")
         return cls(**kw)
+
+    def unit_factor(self) -> float:
+        """The factor that brings the sensor channel's numbers to SI (:func:`compare.sensor_units.unit_factor`;
+        1 when no unit is declared)."""
+        if self.sensor_unit is None:
+            return 1.0
+        return unit_factor(self.sensor_unit, self.sensor_quantity, sensitivity=self.sensor_sensitivity,
+                           sensitivity_unit=self.sensor_sensitivity_unit)
 
     def to_dict(self) -> dict:
         """JSON-able form (the pair as its table)."""
@@ -360,6 +384,7 @@ def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "
                 "finite samples only")
     for key in (sensor,) + tuple(secondary):
         require(float(np.ptp(data[key])) > 0, f"channel {key}", "constant", "a varying signal")
+    data[sensor] = data[sensor] * sidecar.unit_factor()      # SI from here on (sidecar sensor_unit)
     require(read_as in SENSOR_QUANTITIES, "read_as", read_as, "one of: " + ", ".join(SENSOR_QUANTITIES))
     order = SENSOR_QUANTITIES[sidecar.sensor_quantity] - SENSOR_QUANTITIES[read_as]
     require(order >= 0, "sensor_quantity", sidecar.sensor_quantity,
@@ -422,6 +447,11 @@ def load_measurement(path: str | Path, sidecar: Sidecar | str | Path | None = No
         ref = (p.parent / sidecar.reference).resolve()
         require(ref.is_file(), f"{Path(sidecar_path).name}.reference" if sidecar_path else "reference",
                 sidecar.reference, f"an existing measurement file, relative to {p.name}'s folder (resolved: {ref})")
+    is_wav = sidecar.format == "wav" or (sidecar.format == "auto" and p.suffix.lower() == ".wav")
+    require(not (is_wav and sidecar.sensor_unit == "counts"),
+            f"{Path(sidecar_path).name}.sensor_unit" if sidecar_path else "sensor_unit", "counts",
+            "fullscale for a WAV file (its integer samples are read as fractions of full scale, in [-1, 1)), or a "
+            "physical unit")
     named_by_sidecar = sidecar.channels is not None and sidecar.time_column in sidecar.channels
     rec = read_record(p, sidecar.format, time_column=None if named_by_sidecar else sidecar.time_column,
                       variable=sidecar.variable, fs_hz=sidecar.fs_hz)

@@ -48,6 +48,8 @@ def write_template(measurement_path: str | Path) -> Path | None:
              f'pair = ""     # required: a preset ({", ".join(PRESETS)}) or a [pair] table',
              f'sensor = ""   # required: the vibration channel, one of {", ".join(names)} (perhaps "{sensor}")',
              '# sensor_quantity = "acceleration"   # or "velocity", "displacement"',
+             '# sensor_unit = "m/s^2"   # the unit of the sensor\'s numbers: m/s^2, mm/s^2, g; m/s, mm/s, in/s; m, mm, '
+             'um; or V, mV, counts, fullscale with sensor_sensitivity (file units per sensor_sensitivity_unit)',
              (f'tacho = "{tacho}"' if tacho else '# tacho = "..."') + "   # a once-per-revolution channel, if any; "
              "tacho_pulses_per_rev = 1, tacho_shaft = \"pinion\"",
              '# fault = "unknown"']
