@@ -13,6 +13,11 @@
   one for a displacement model (a transmission error, ``dte_m``); what only integration could give (an
   acceleration or a velocity for a displacement model) is refused, naming the file. A sensor channel whose name
   carries another quantity's unit (``dte_m`` declared an acceleration) is read as declared, with a warning.
+- **Unit.** A sidecar's ``sensor_unit`` brings the record to SI where it is read (:mod:`compare.sensor_units`),
+  the unit of the simulated training records. A file without one is read as it is written, which a model that
+  reads absolute levels (:func:`models.spec.absolute_level_inputs`: the feature baselines, a CNN with a level side
+  input) takes for SI: each such record carries a warning naming the file (:func:`unit_note`); a level-free model
+  gets none. A record and its reference declare a unit both or neither.
 - **Length.** Every record is cut to the model's trained record length from its start (``spec.n_samples``), so a
   prediction does not depend on the other files of the call; a shorter one is left as it is for
   :func:`models.spec.check_input` (refused, or a warning with ``allow_mismatch``). A reference is resampled to its
@@ -36,7 +41,7 @@ from models.data import PairInfo, SignalSet, teeth_class_of
 from models.labels_file import LABELS_FILE, class_name, read_labels
 from models.order_tracking import TRACK_MIN_RAD
 from models.record_groups import RecordGroups, named
-from models.spec import channel_quantity
+from models.spec import absolute_level_inputs, channel_quantity
 
 MEASUREMENT_SUFFIXES = (".csv", ".txt", ".npy", ".npz", ".wav", ".mat")
 #: largest speed difference between a record and its healthy reference (fraction)
@@ -115,6 +120,20 @@ def quantity_note(measurement) -> str:
     return (f"channel {measurement.sensor}'s name suggests a {named_q} (its unit suffix), but the sidecar's "
             f"sensor_quantity is {given!r} (the default is acceleration): read as {given}; set sensor_quantity if "
             "the name is right")
+
+
+def unit_note(measurement, f: Path, spec) -> str:
+    """A warning when ``spec``'s model reads absolute levels (:func:`models.spec.absolute_level_inputs`) and
+    ``f``'s sidecar declares no ``sensor_unit``, else "" ."""
+    from compare.sensor_units import SI_UNITS
+
+    reads = absolute_level_inputs(spec) if spec is not None else ""
+    if not reads or measurement.sidecar.sensor_unit is not None:
+        return ""
+    si = SI_UNITS.get(channel_quantity(spec.channel) or "", "SI units")
+    return (f"{f.name}: no sensor_unit in its sidecar, and this model reads absolute levels ({reads}, trained in "
+            f"{si}): the file's numbers are taken as {si}, so the prediction depends on the unit they are written "
+            "in; declare sensor_unit (and sensor_sensitivity for V, mV, counts, fullscale)")
 
 
 def _file_labels(records: list[Path], sidecars: dict, refs: set, classes) -> list[dict] | None:
@@ -264,7 +283,8 @@ def _record(m, f: Path, spec, refine_speed: bool, allow_mismatch: bool, mode: st
     if spec is not None:
         x = x[:spec.n_samples]
     row = {"file": f.name, "speed_rpm": speed, "torque_nm": float(m.torque_nm), "speed_rpm_sidecar": float(m.speed_rpm),
-           "speed_method": method, "speed_note": note, "quantity_note": quantity_note(m), "pair_note": pair_note,
+           "speed_method": method, "speed_note": note, "quantity_note": quantity_note(m),
+           "unit_note": unit_note(m, f, spec), "pair_note": pair_note,
            "clip_note": clip_note, "drift_note": drift_note, "length_note": "", "mesh_phase_dev_rad": dev,
            "order_tracked": bool(dev > TRACK_MIN_RAD)}
     ref = None
@@ -295,6 +315,12 @@ def _reference(m, f: Path, speed_rpm: float, refine_speed: bool, spec, mode: str
             f"an existing measurement file (relative to {f.parent})")
     sc = _sidecar(p)
     read_as(p, sc, spec)
+    if (sc.sensor_unit is None) != (m.sidecar.sensor_unit is None):
+        said = f"declares {m.sidecar.sensor_unit}" if m.sidecar.sensor_unit else "declares none"
+        raise InputError(f"{p.name}: sensor_unit", sc.sensor_unit,
+                         f"{'a' if m.sidecar.sensor_unit else 'no'} sensor_unit, as its record {f.name} {said}: a "
+                         "record and its reference are read in the same unit (declare it in both sidecars or in "
+                         "neither)")
     try:
         r = load_measurement(p, sc, read_as=mode)
     except InputError as exc:
@@ -325,4 +351,4 @@ def load_measurements(paths: list[str | Path], *, refine_speed: bool = True, spe
 
 
 __all__ = ["MAX_REFERENCE_SPEED_OFFSET", "MEASUREMENT_SUFFIXES", "folder_files", "load_measurement_groups",
-           "load_measurements", "quantity_note", "read_as"]
+           "load_measurements", "quantity_note", "read_as", "unit_note"]

@@ -70,6 +70,10 @@ from models.tooth_profile import N_FEATURES, PROFILE_SPEC, profile_of_difference
 #: calibration and on the transmission path (see the module docstring)
 OPERATING_COLUMNS: tuple[str, ...] = ("speed_rpm", "torque_nm", "signal_rms", "signal_rms_hp", "signal_rms_no1x",
                                       "tsa_diff_rms", "tooth_profile", "residual_rms", "residual_profile")
+#: side inputs that carry the record's absolute level in its own unit (a sensor's unit and gain change them; the
+#: others are levels of the operating point, ratios or shapes): a model reading one needs measurements in SI
+#: (:func:`models.spec.absolute_level_inputs`, sidecar ``sensor_unit``)
+LEVEL_COLUMNS: tuple[str, ...] = ("signal_rms", "signal_rms_hp", "signal_rms_no1x", "tsa_diff_rms")
 #: side inputs that are a group of values taken as they are (not log10): name -> number of values
 GROUPS = {"tooth_profile": N_FEATURES, "residual_profile": N_FEATURES}
 #: side inputs computed from the record that need its speed (the ``speed_rpm`` label)

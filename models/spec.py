@@ -22,7 +22,7 @@ import pandas as pd
 from gearpit.errors import InputError, require
 from models.data import PairInfo, SignalSet
 from models.input_checks import check_inputs
-from models.operating import NEEDS_SPEED
+from models.operating import LEVEL_COLUMNS, NEEDS_SPEED
 from models.representation_spec import FS_BOUND, RepresentationSpec
 
 FORMAT = "gearpit-model"
@@ -138,6 +138,23 @@ def _a(quantity: str) -> str:
     return f"{'an' if quantity[0] in 'aeiou' else 'a'} {quantity}"
 
 
+def absolute_level_inputs(spec: ModelSpec) -> str:
+    """What of ``spec``'s inputs reads the record's absolute level (its numbers in the trained channel's unit),
+    in words; "" for a level-free model.
+
+    A feature baseline reads its feature table, most of whose columns are levels in the record's unit (RMS, peaks,
+    the amplitudes of mesh lines, sidebands and shaft orders: 56 of the 80 columns of a toy record change when it
+    is written in g instead of m/s^2); with ``reference`` its own and its ``delta:`` columns still are. A CNN
+    reads a representation normalised per record (a log ratio to the reference's spectrum, with a reference),
+    free of the unit, unless a side input carries a level (:data:`models.operating.LEVEL_COLUMNS`:
+    ``signal_rms``, ``signal_rms_hp``, ``signal_rms_no1x``, ``tsa_diff_rms``; e.g. the variants ``tsa_level``
+    and ``tsa_te_diff``)."""
+    if spec.model_type != "cnn":
+        return f"its {spec.model_type} feature table (RMS, peaks, line amplitudes)"
+    cols = [c for c in spec.operating_inputs.get("columns", ()) if c in LEVEL_COLUMNS]
+    return f"the side input{'s' if len(cols) > 1 else ''} {', '.join(cols)}" if cols else ""
+
+
 #: relative margin of the trained ranges (a measured speed of 1199.999 rpm is inside [1200, 1500])
 RANGE_TOLERANCE = 1e-3
 
@@ -200,7 +217,8 @@ def check_input(spec: ModelSpec, data: SignalSet, *, allow_mismatch: bool = Fals
     per_record = [list(common) for _ in range(len(data))]
     # a measurement whose channel name suggests another quantity than its sidecar's; whose sidecar speed the
     # spectrum did not confirm; whose sidecar pair it questions; clipped; whose drift was removed; cut to its reference
-    for col in ("quantity_note", "speed_note", "pair_note", "clip_note", "drift_note", "length_note"):
+    # ... declared without a unit to a model that reads absolute levels
+    for col in ("quantity_note", "unit_note", "speed_note", "pair_note", "clip_note", "drift_note", "length_note"):
         if col in data.labels:
             for i, note in enumerate(data.labels[col].fillna("").astype(str)):
                 if note:

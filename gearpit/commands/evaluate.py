@@ -109,6 +109,14 @@ def measurement_notes(data) -> None:
         print(f"warning: {line}", file=sys.stderr)
 
 
+def unit_notes(data) -> list[str]:
+    """The measurement files read without a ``sensor_unit`` by a model that reads absolute levels, one note each
+    (:func:`models.measurement_files.unit_note`); [] for a dataset or a level-free model."""
+    if "unit_note" not in data.labels:
+        return []
+    return [v for v in data.labels["unit_note"].fillna("").astype(str) if v]
+
+
 def run(args) -> int:
     from models.evaluate import evaluate, report_markdown, write_report
     from models.io import check_out_dir, load_model
@@ -136,6 +144,9 @@ def run(args) -> int:
                        + (f" (+{len(data) - 3})" if len(data) > 3 else ""))
     metrics = evaluate(data, pred)
     metrics["n_unscored"] = int(unscored.sum())
+    metrics["unit_notes"] = unit_notes(labelled)
+    for line in metrics["unit_notes"]:
+        print(f"warning: {line}", file=sys.stderr)
     metrics["model"] = str(args.model)
     note = no_novelty_note(model)
     if note:
@@ -146,5 +157,6 @@ def run(args) -> int:
     print(report_markdown(metrics).split("## Severity class confusion")[0].rstrip())
     print(json.dumps({"accuracy": metrics["severity_class"]["accuracy"], "macro_f1": metrics["severity_class"]["macro_f1"],
                       "teeth_accuracy": metrics.get("teeth", {}).get("accuracy"), "severity_mae": metrics.get("severity_mae"),
-                      "severity_mae_n": metrics.get("severity_mae_n"), "out": str(out)}))
+                      "severity_mae_n": metrics.get("severity_mae_n"), "unit_notes": len(metrics["unit_notes"]),
+                      "out": str(out)}))
     return 0
