@@ -21,6 +21,7 @@ import numpy as np
 from compare.candidates import bound_note
 from compare.path_regime import path_regime_text
 from compare.response import response_text
+from compare.sensor_units import describe_unit
 from compare.chaos import describe_interval, drivetrains_message
 from compare.escalation import reason_text
 from gearpit import __version__
@@ -34,6 +35,28 @@ def _num(v):
         return None
     v = float(v)
     return v if math.isfinite(v) else None
+
+
+def gain_factor(measurement, gain_db: float) -> float | None:
+    """The fitted sensor gain as a dimensionless factor, measured over model, when the measurement's sidecar
+    declares its ``sensor_unit`` (both are then in SI: ~1 for a calibrated sensor on a model of the right level);
+    None without one (the gain then also carries the file's unit)."""
+    if measurement.sidecar.sensor_unit is None:
+        return None
+    return float(10.0 ** (gain_db / 20.0))
+
+
+def gain_text(measurement, gain_db: float) -> str:
+    """The fitted sensor gain for the CLI and the report: a dimensionless correction with a declared unit
+    (:func:`gain_factor`), else in dB as fitted."""
+    f = gain_factor(measurement, gain_db)
+    if f is None:
+        return f"sensor gain {gain_db:+.2f} dB"
+    sc = measurement.sidecar
+    unit = describe_unit(sc.sensor_unit, sc.sensor_quantity, sensitivity=sc.sensor_sensitivity,
+                         sensitivity_unit=sc.sensor_sensitivity_unit)
+    return (f"sensor gain x {f:#.3g} ({gain_db:+.2f} dB; a dimensionless correction: the measurement, read in SI "
+            f"from its declared unit {unit}, over the model; ~1 for a calibrated sensor)")
 
 
 def document(comparison, attribution=None, ledger_rows=(), *, measurement_path: str | None = None,
@@ -59,7 +82,8 @@ def document(comparison, attribution=None, ledger_rows=(), *, measurement_path: 
         "software_version": __version__,
         "measurement": {"path": measurement_path or m.source, "sidecar": m.sidecar_path,
                         "fs_hz": m.fs_hz, "n_samples": m.n_samples,
-                        "sensor": m.sensor, "sensor_quantity": m.sidecar.sensor_quantity, "tacho": m.tacho,
+                        "sensor": m.sensor, "sensor_quantity": m.sidecar.sensor_quantity,
+                        "sensor_unit": m.sidecar.sensor_unit, "tacho": m.tacho,
                         "fault": m.fault,
                         "speed_rpm_nominal": m.speed_rpm, "speed_rpm": ref.speed.speed_rpm,
                         "speed_method": ref.speed.method, "speed_drift_rad": _num(ref.speed.drift_rad),
@@ -71,6 +95,7 @@ def document(comparison, attribution=None, ledger_rows=(), *, measurement_path: 
                   "user_description": comparison.model.description or None, "sensor": comparison.model.sensor,
                   "effects": [e.to_dict() for e in comparison.model.effects]},
         "gain_db": g,
+        "gain_factor": gain_factor(m, g),
         "calibration": comparison.calibration.to_dict() if comparison.calibration is not None else None,
         "noise_added_rms": ev.noise_added_rms,
         "error_db": {k: float(v) for k, v in comparison.error_db.items()},
@@ -213,7 +238,9 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
              f"<p>Model: <code>{html.escape(doc['model']['description'])}</code>"
              + (f" ({html.escape(doc['model']['user_description'])})" if doc['model'].get('user_description') else "")
              + ". Sensor gain fitted: "
-             f"{doc['gain_db']:+.2f} dB.</p>",
+             + (f"{doc['gain_db']:+.2f} dB" if doc.get("gain_factor") is None else
+                f"x {doc['gain_factor']:#.3g} ({doc['gain_db']:+.2f} dB; the measurement read in SI from its declared "
+                f"unit {html.escape(m['sensor_unit'])}: ~1 for a calibrated sensor)") + ".</p>",
              *_pair_html(doc.get("pair_check")),
              *_below_shafts_html(comparison.reference),
              *_calibration_html(doc.get("calibration"), doc.get("escalation")),

@@ -38,6 +38,10 @@ SCHEMA = {
                                                "description": "what the sensor measures (sidecar); a velocity or "
                                                               "displacement is differentiated to acceleration "
                                                               "(features.derivative) before every view"},
+                           "sensor_unit": {"type": ["string", "null"],
+                                           "description": "the unit of the sensor's numbers (sidecar sensor_unit, "
+                                                          "compare.sensor_units), brought to SI when read; null: "
+                                                          "not declared, the numbers as written"},
                            "tacho": STR, "fault": STR,
                            "speed_rpm": {"type": "number", "description": "refined mean pinion speed"},
                            "speed_rpm_nominal": {"type": "number"},
@@ -84,6 +88,10 @@ SCHEMA = {
                                  "sensor": {"type": "string"},
                                  "effects": {"type": "array", "items": {"type": "object", "required": ["name"]}}}},
         "gain_db": {"type": "number", "description": "fitted sensor gain, model -> measurement"},
+        "gain_factor": {"type": ["number", "null"],
+                        "description": "with a declared measurement.sensor_unit: the fitted gain as a dimensionless "
+                                       "factor, measured (read in SI) over model, ~1 for a calibrated sensor; null "
+                                       "without one (gain_db then also carries the file's unit)"},
         "calibration": {
             "type": ["object", "null"],
             "description": "nuisance calibration (compare.calibration); null: not calibrated",

@@ -114,3 +114,50 @@ def test_an_integer_wav_declared_fullscale_reads_in_si(tmp_path):
 def test_a_bad_unit_declaration_is_refused_naming_field_value_and_allowed(tmp_path, side, match):
     with pytest.raises(InputError, match=r"r\.json\." + match):
         load_measurement(_write(tmp_path, "r", _record(), **side))
+
+
+@pytest.fixture(scope="module")
+def rig_record():
+    """A 1 s record of the model's own rig (no hidden effect, the default drive train) through a calibrated
+    sensor (gain 1, m/s^2), with its tachometer."""
+    from compare.synthetic import rig_measurement
+
+    return rig_measurement((), duration_s=1.0, gain=1.0, nuisance={})
+
+
+def _compare(tmp_path, name, m, k, capsys, **side):
+    from gearpit.cli import main
+
+    np.savez(tmp_path / f"{name}.npz", acc=m.channels["acc"] * k, tacho=m.channels["tacho"], fs_hz=m.fs_hz)
+    (tmp_path / f"{name}.json").write_text(json.dumps({"speed_rpm": 1005.0, "torque_nm": 50.0, "pair": "spur-gds",
+                                                       "sensor": "acc", "tacho": "tacho", **side}))
+    capsys.readouterr()
+    rc = main(["compare", str(tmp_path / f"{name}.npz"), "--no-attribution", "--no-calibrate",
+               "--json", str(tmp_path / f"{name}.out.json"), "--report", str(tmp_path / f"{name}.html")])
+    out = capsys.readouterr().out
+    assert rc == 0, out
+    return json.loads((tmp_path / f"{name}.out.json").read_text()), out
+
+
+def test_compare_reports_the_gain_of_a_declared_unit_as_a_dimensionless_correction(tmp_path, rig_record, capsys):
+    """Undeclared, the fitted gain carries the file's unit (a record in g: -19.83 dB = 20 log10(1 / 9.80665)),
+    in dB as before; declared, the record is read in m/s^2 and the gain is the calibration's correction, x 1.00
+    for this calibrated sensor (JSON gain_factor, CLI line, HTML report, schema-valid)."""
+    plain, out_plain = _compare(tmp_path, "plain", rig_record, 1.0, capsys)
+    in_g, _ = _compare(tmp_path, "in_g", rig_record, 1 / 9.80665, capsys)
+    said, out_said = _compare(tmp_path, "said_g", rig_record, 1 / 9.80665, capsys, sensor_unit="g")
+    assert plain["gain_factor"] is None and in_g["gain_factor"] is None
+    assert in_g["gain_db"] == pytest.approx(plain["gain_db"] + 20 * np.log10(1 / 9.80665), abs=1e-6)
+    assert f"sensor gain {plain['gain_db']:+.2f} dB\n" in out_plain
+    assert said["measurement"]["sensor_unit"] == "g"
+    assert said["gain_db"] == pytest.approx(plain["gain_db"], abs=1e-6)
+    assert said["gain_factor"] == pytest.approx(10 ** (said["gain_db"] / 20), rel=1e-12)
+    assert said["gain_factor"] == pytest.approx(1.0, abs=0.01)
+    assert "sensor gain x 1.00 (" in out_said and "declared unit g (x 9.80665 to m/s^2)" in out_said
+    assert "Sensor gain fitted: x 1.00 (" in (tmp_path / "said_g.html").read_text()
+    assert f"Sensor gain fitted: {plain['gain_db']:+.2f} dB." in (tmp_path / "plain.html").read_text()
+    jsonschema = pytest.importorskip("jsonschema")
+    from compare.schema import SCHEMA
+
+    for doc in (plain, said):
+        jsonschema.validate(doc, SCHEMA)

@@ -36,6 +36,7 @@ def run(args: argparse.Namespace) -> int:
     from compare.response import response_text
     from compare.chaos import describe_interval, drivetrains_message
     from compare.ledger import history_table
+    from compare.report import gain_text
     from compare.workflow import run as run_loop
 
     cands = [c.strip() for c in args.candidates.split(",") if c.strip()] if args.candidates else None
@@ -48,7 +49,8 @@ def run(args: argparse.Namespace) -> int:
     for msg in out.messages:
         print(msg)
     ref = c.reference
-    print(f"speed {ref.speed.speed_rpm:.3f} rpm ({ref.speed.method}), sensor gain {c.evaluation.residuals.gain_db:+.2f} dB")
+    print(f"speed {ref.speed.speed_rpm:.3f} rpm ({ref.speed.method}), "
+          + gain_text(ref.measurement, c.evaluation.residuals.gain_db))
     print("error (dB): " + ", ".join(f"{k} {v:.2f}" for k, v in c.error_db.items()))
     if c.disagreements:
         print("largest disagreements:")
