@@ -131,7 +131,7 @@ def unit_note(measurement, f: Path, spec) -> str:
     if not reads or measurement.sidecar.sensor_unit is not None:
         return ""
     si = SI_UNITS.get(channel_quantity(spec.channel) or "", "SI units")
-    return (f"{f.name}: no sensor_unit in its sidecar, and this model reads absolute levels ({reads}, trained in "
+    return (f"no sensor_unit in the sidecar of {f.name}, and this model reads absolute levels ({reads}, trained in "
             f"{si}): the file's numbers are taken as {si}, so the prediction depends on the unit they are written "
             "in; declare sensor_unit (and sensor_sensitivity for V, mV, counts, fullscale)")
 

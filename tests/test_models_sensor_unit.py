@@ -93,18 +93,20 @@ def test_a_file_without_a_unit_warns_naming_it_when_the_model_reads_levels(model
     said = _write(folder, "said_g", x / G, sensor_unit="g", fault="severe")
     rows, err = _predict(model, [plain, said], capsys)
     w = rows["plain_g.npy"]["warning"]
-    assert "plain_g.npy: no sensor_unit in its sidecar, and this model reads absolute levels (its logreg feature " \
-           "table" in w and "trained in m/s^2" in w
+    assert "no sensor_unit in the sidecar of plain_g.npy, and this model reads absolute levels (its logreg " \
+           "feature table" in w and "trained in m/s^2" in w
     assert "sensor_unit" not in rows["said_g.npy"]["warning"]
-    assert "warning: plain_g.npy: plain_g.npy: no sensor_unit" in err and "said_g.npy: no sensor_unit" not in err
+    assert "warning: plain_g.npy: no sensor_unit in the sidecar of plain_g.npy" in err
+    assert "said_g.npy: no sensor_unit" not in err
     assert "1 no sensor_unit for a model that reads levels" in err
 
     capsys.readouterr()
     assert main(["evaluate", str(model), str(folder), "--out", str(tmp_path / "ev"), "--sidecar-speed"]) == 0
     cap = capsys.readouterr()
     metrics = json.loads((tmp_path / "ev" / "metrics.json").read_text())
-    assert len(metrics["unit_notes"]) == 1 and metrics["unit_notes"][0].startswith("plain_g.npy: no sensor_unit")
-    assert "warning: plain_g.npy: no sensor_unit" in cap.err
+    assert len(metrics["unit_notes"]) == 1
+    assert metrics["unit_notes"][0].startswith("plain_g.npy: no sensor_unit in the sidecar of plain_g.npy")
+    assert "warning: plain_g.npy: no sensor_unit in the sidecar" in cap.err
     assert json.loads(cap.out.strip().splitlines()[-1])["unit_notes"] == 1
 
 

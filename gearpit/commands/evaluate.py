@@ -114,7 +114,8 @@ def unit_notes(data) -> list[str]:
     (:func:`models.measurement_files.unit_note`); [] for a dataset or a level-free model."""
     if "unit_note" not in data.labels:
         return []
-    return [v for v in data.labels["unit_note"].fillna("").astype(str) if v]
+    notes = data.labels["unit_note"].fillna("").astype(str)
+    return [f"{f}: {v}" for f, v in zip(data.labels["file"], notes) if v]
 
 
 def run(args) -> int:
