@@ -11,12 +11,13 @@ Generic layouts
   comma, a byte-order mark, a time column in s/ms/us).
 - NPY: a 1-D array (one channel) or 2-D (the longer axis is time).
 - NPZ: one 2-D array, or several equal-length 1-D arrays (one channel each, named by
-  key); a scalar ``fs_hz`` or ``fs`` entry gives the sampling rate.
+  key, in the order saved); a scalar ``fs_hz`` or ``fs`` entry gives the sampling rate.
 - WAV: :func:`scipy.io.wavfile.read` (integer samples scaled to [-1, 1)).
 - MAT: :func:`scipy.io.loadmat`; v7.3 files (HDF5) through ``h5py``. Numeric
   variables as in NPZ; a scalar ``fs``, ``fs_hz`` or ``Fs`` gives the sampling rate.
 - NPZ and MAT alike: structs (MATLAB structs, HDF5 groups) are flattened, each variable
-  named by its own name unless another has it too (then its dotted path, ``run1.acc``);
+  named by its own name unless another has it too (then its dotted path, ``run1.acc``), in
+  the file's order (MAT v7.3: where the file stores it, else :attr:`RawRecord.no_index`);
   a uniform ``time``/``t`` vector (``time_ms`` ...) gives the rate and is no channel.
 
 Public layouts (``format`` in the sidecar, or recognised by the file name)
@@ -76,12 +77,16 @@ class RawRecord:
     hints : dict
         Operating-point defaults read from the file name or layout
         (``speed_rpm``, ``torque_nm``, ``fault``, ``tacho``, ``sensor``, ``fs_hz``).
+    no_index : str
+        Why a 0-based channel index cannot be read in the file's order (a MAT v7.3 file that does not store the
+        order of its variables); "" where it can: an index counts ``names`` in the file's order.
     """
 
     names: tuple
     data: np.ndarray
     fs_hz: float | None = None
     hints: dict = field(default_factory=dict)
+    no_index: str = ""
 
 
 def detect_format(path: Path) -> str:
@@ -219,9 +224,12 @@ def _flatten(mapping: dict, prefix: str = "") -> dict:
     return out
 
 
-def _from_mapping(mapping: dict, variable: str | None, where: str, fs_hz: float | None = None) -> RawRecord:
-    """Numeric variables of an NPZ/MAT file; nested structs flattened (a variable keeps its own name when no other
-    leaf has it, else its dotted path); a scalar ``fs`` or a uniform ``time``/``t`` vector gives the rate."""
+def _from_mapping(mapping: dict, variable: str | None, where: str, fs_hz: float | None = None,
+                  unordered: frozenset = frozenset()) -> RawRecord:
+    """Numeric variables of an NPZ/MAT file, in the file's order (``mapping``'s); nested structs flattened (a
+    variable keeps its own name when no other leaf has it, else its dotted path); a scalar ``fs`` or a uniform
+    ``time``/``t`` vector gives the rate. ``unordered``: dotted paths of the structs (``""``: the file) whose
+    members' order the file does not store; channels that only they order get no index (:attr:`RawRecord.no_index`)."""
     flat = _flatten(mapping)
     leaf = [k.rsplit(".", 1)[-1] for k in flat]
     named = {(lf if leaf.count(lf) == 1 else k): v for k, lf, v in zip(flat, leaf, flat.values())}
@@ -251,8 +259,22 @@ def _from_mapping(mapping: dict, variable: str | None, where: str, fs_hz: float 
             "one 2-D array, or 1-D arrays of equal length (else name one with 'variable')")
     lengths = {v.size for v in vectors.values()}
     require(len(lengths) == 1, where, {k: v.size for k, v in vectors.items()}, "1-D arrays of equal length")
-    names = tuple(sorted(vectors))
-    return RawRecord(names, np.column_stack([vectors[k].astype(float) for k in names]), fs)
+    names = tuple(vectors)       # the file's order: a column index counts them as written
+    paths = {k: p for k, p in zip(named, flat)}
+    unknown = sorted({_common_struct(paths[a], paths[b]) for i, a in enumerate(names) for b in names[i + 1:]}
+                     & set(unordered))
+    no_index = ("this MAT v7.3 (HDF5) file does not store the order of "
+                + " or ".join(f"struct {u}'s fields" if u else "its variables" for u in unknown)) if unknown else ""
+    return RawRecord(names, np.column_stack([vectors[k].astype(float) for k in names]), fs, no_index=no_index)
+
+
+def _common_struct(a: str, b: str) -> str:
+    """The dotted path of the innermost struct holding both leaves ``a`` and ``b`` (``""``: the file's top level)."""
+    pa, pb = a.split(".")[:-1], b.split(".")[:-1]
+    n = 0
+    while n < min(len(pa), len(pb)) and pa[n] == pb[n]:
+        n += 1
+    return ".".join(pa[:n])
 
 
 def read_wav(path: Path) -> RawRecord:
@@ -277,27 +299,47 @@ def read_mat(path: Path, variable: str | None = None, *, fs_hz: float | None = N
     try:
         mapping = scipy.io.loadmat(path, simplify_cells=True)
     except (NotImplementedError, ValueError) as exc:  # v7.3 is HDF5 (NotImplementedError from scipy)
-        mapping = _read_hdf5_mat(path, exc)
-    return _from_mapping(mapping, variable, str(path), fs_hz=fs_hz)
+        mapping, unordered = _read_hdf5_mat(path, exc)
+        return _from_mapping(mapping, variable, str(path), fs_hz=fs_hz, unordered=unordered)
+    return _from_mapping(mapping, variable, str(path), fs_hz=fs_hz)     # scipy keeps the file's order
 
 
-def _read_hdf5_mat(path: Path, exc: Exception) -> dict:
+def _read_hdf5_mat(path: Path, exc: Exception) -> tuple[dict, frozenset]:
     try:
         import h5py
     except ImportError:  # pragma: no cover - h5py is a dependency
         raise InputError("measurement", str(path), "a MAT v7.3 file needs h5py (pip install h5py)") from None
     if not h5py.is_hdf5(path):
         raise InputError("measurement", str(path), f"a readable MAT file ({exc})") from None
+    unordered: set = set()
     with h5py.File(path, "r") as f:
-        return _hdf5_group(f, h5py)
+        return _hdf5_group(f, h5py, unordered), frozenset(unordered)
 
 
-def _hdf5_group(group, h5py) -> dict:
-    """A MAT v7.3 group (the file, a struct) as nested dicts of its numeric datasets."""
+def _hdf5_group(group, h5py, unordered: set, path: str = "") -> dict:
+    """A MAT v7.3 group (the file, a struct) as nested dicts of its numeric datasets, in the order MATLAB wrote
+    them where the file stores it (a struct's ``MATLAB_fields`` attribute, or HDF5 link creation order); the
+    dotted path of a group with more than one member whose order is not stored is added to ``unordered``."""
+    keys = list(group.keys())       # h5py lists members in creation order where it is tracked, else by name
+    fields = [_matlab_text(f) for f in group.attrs.get("MATLAB_fields", ())]
+    tracked = (group["/"] if isinstance(group, h5py.File) else group).id.get_create_plist().get_link_creation_order()
+    if fields and set(keys) <= set(fields):
+        keys = [k for k in fields if k in keys]
+    elif not tracked and len(keys) > 1:
+        unordered.add(path)
     out = {}
-    for k, v in group.items():
+    for k in keys:
+        v = group[k]
         if isinstance(v, h5py.Group) and not k.startswith("#"):
-            out[k] = _hdf5_group(v, h5py)
+            out[k] = _hdf5_group(v, h5py, unordered, f"{path}.{k}" if path else k)
         elif isinstance(v, h5py.Dataset) and v.dtype.kind in "fiu":
             out[k] = np.asarray(v[()]).T  # MATLAB stores column-major
     return out
+
+
+def _matlab_text(value) -> str:
+    """A name as MATLAB stores it in an HDF5 attribute (an array of single bytes, bytes or str)."""
+    if isinstance(value, np.ndarray):
+        return b"".join(np.asarray(value).ravel().tolist()).decode("utf-8", "replace") if value.dtype.kind == "S" \
+            else "".join(map(str, value.ravel().tolist()))
+    return value.decode("utf-8", "replace") if isinstance(value, bytes) else str(value)

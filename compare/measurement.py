@@ -10,7 +10,8 @@ key                        required  meaning
 ``speed_rpm``              [2]_      nominal pinion (input) speed (rpm); refined from the data
 ``torque_nm``              [2]_      pinion (input) torque (N m)
 ``pair``                   yes       preset name (``"spur-gds"``) or a pair table as in a pair TOML
-``sensor``                 [2]_      the vibration channel: name or 0-based column index
+``sensor``                 [2]_      the vibration channel: name or 0-based index in the file's order
+                                     (README, "A channel index")
 ``sensor_quantity``        no        what the sensor measures: ``"acceleration"`` (default),
                                      ``"velocity"`` or ``"displacement"`` (read as acceleration:
                                      :func:`features.derivative.derivative`, any unit: the gain
@@ -301,8 +302,12 @@ class Measurement:
         return None if self.tacho is None else self.channels[self.tacho]
 
 
-def _channel(ref, names: tuple, where: str) -> str:
+def _channel(ref, names: tuple, where: str, no_index: str = "") -> str:
+    """The channel ``ref`` (a name, or a 0-based index in the file's order) names; ``no_index``: why the file's
+    order is not known (:attr:`compare.formats.RawRecord.no_index`), which refuses an index."""
     if isinstance(ref, int):
+        require(not no_index, where, ref, f"a channel name ({no_index}, so a column index could name the wrong "
+                "channel): one of " + ", ".join(names))
         require(ref < len(names), where, ref, f"a column index in [0, {len(names) - 1}]")
         return names[ref]
     require(ref in names, where, ref, "one of: " + ", ".join(names))
@@ -310,10 +315,12 @@ def _channel(ref, names: tuple, where: str) -> str:
 
 
 def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "arrays",
-                            hints: dict | None = None, read_as: str = "acceleration") -> Measurement:
+                            hints: dict | None = None, read_as: str = "acceleration",
+                            no_index: str = "") -> Measurement:
     """Validate channels (name -> 1-D array) against a sidecar; the one place all checks live. ``read_as``: the
     quantity the sensor channel is brought to (one of :data:`SENSOR_QUANTITIES`, differentiated from the sidecar's
-    ``sensor_quantity``; never integrated)."""
+    ``sensor_quantity``; never integrated). A channel index counts ``channels`` in their order; ``no_index``:
+    why it cannot (:func:`_channel`)."""
     hints = hints or {}
     names = tuple(channels)
     require(names, "channels", "none", "at least one channel")
@@ -332,9 +339,9 @@ def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "
     if sensor_ref is None and len(names) == 1:
         sensor_ref = names[0]
     require(sensor_ref is not None, "sensor", None, "which channel is the sensor: one of " + ", ".join(names))
-    sensor = _channel(sensor_ref, names, "sensor")
+    sensor = _channel(sensor_ref, names, "sensor", no_index)
     tacho_ref = sidecar.tacho if sidecar.tacho is not None else hints.get("tacho")
-    tacho = _channel(tacho_ref, names, "tacho") if tacho_ref is not None else None
+    tacho = _channel(tacho_ref, names, "tacho", no_index) if tacho_ref is not None else None
     require(tacho != sensor, "tacho", tacho, "a channel other than the sensor")
     data = {k: np.asarray(v, dtype=float).ravel() for k, v in channels.items()}
     pair = sidecar.pair
@@ -439,5 +446,6 @@ def load_measurement(path: str | Path, sidecar: Sidecar | str | Path | None = No
                     f"the file's own sampling rate {rec.fs_hz:.6g} Hz (or leave fs_hz out)")
         hints["fs_hz"] = rec.fs_hz
     channels = {name: rec.data[:, i] for i, name in enumerate(names)}
-    m = measurement_from_arrays(channels, sidecar, source=str(p), hints=hints, read_as=read_as)
+    m = measurement_from_arrays(channels, sidecar, source=str(p), hints=hints, read_as=read_as,
+                                no_index="" if sidecar.channels is not None else rec.no_index)
     return replace(m, sidecar_path=sidecar_path)
