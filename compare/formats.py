@@ -79,7 +79,10 @@ class RawRecord:
         (``speed_rpm``, ``torque_nm``, ``fault``, ``tacho``, ``sensor``, ``fs_hz``).
     no_index : str
         Why a 0-based channel index cannot be read in the file's order (a MAT v7.3 file that does not store the
-        order of its variables); "" where it can: an index counts ``names`` in the file's order.
+        order of its variables); "" where it can: an index counts ``columns`` in the file's order.
+    columns : tuple of str
+        The file's columns as written, a time column the reader took out of ``names`` included: what a 0-based
+        channel index counts (empty: ``names``).
     """
 
     names: tuple
@@ -87,6 +90,7 @@ class RawRecord:
     fs_hz: float | None = None
     hints: dict = field(default_factory=dict)
     no_index: str = ""
+    columns: tuple = ()
 
 
 def detect_format(path: Path) -> str:
@@ -133,7 +137,7 @@ def read_record(path: str | Path, fmt: str = "auto", *, time_column: str | None 
         rec = read_delimited(p, time_column=time_column, fs_hz=fs_hz)
         return RawRecord(rec.names, rec.data, rec.fs_hz,
                          {"fs_hz": 12800.0, "tacho": "speed", "sensor": "gearbox_vibration_x",
-                          **_mcc5_name_hints(p.name)})
+                          **_mcc5_name_hints(p.name)}, columns=rec.columns)
     if fmt == "phm2023":
         return read_phm2023(p)
     return read_seu(p)
@@ -143,7 +147,9 @@ def read_record(path: str | Path, fmt: str = "auto", *, time_column: str | None 
 def read_delimited(path: Path, *, time_column: str | None = None, skip_text_lines: bool = False,
                    fs_hz: float | None = None) -> RawRecord:
     """Generic CSV/TXT (:mod:`compare.text_records`); ``skip_text_lines`` drops leading non-numeric lines."""
-    return RawRecord(*read_table(path, time_column=time_column, skip_text_lines=skip_text_lines, fs_hz=fs_hz))
+    names, data, fs, columns = read_table(path, time_column=time_column, skip_text_lines=skip_text_lines,
+                                          fs_hz=fs_hz)
+    return RawRecord(names, data, fs, columns=columns)
 
 
 def _mcc5_name_hints(name: str) -> dict:

@@ -86,3 +86,49 @@ def test_a_mat_v73_index_follows_the_stored_order_and_is_refused_where_none_is_s
                                          r"store the order of its variables.*one of aux, vib"):
         load_measurement(tmp_path / "plain.mat", _side(sensor=0))
     np.testing.assert_array_equal(load_measurement(tmp_path / "plain.mat", _side(sensor="vib")).signal, tone)
+
+
+def _csv_time_acc_noise(path, header="time_s,acc,noise"):
+    tone, (noise,) = _tone_and_others(1)
+    t = np.arange(N) / FS
+    np.savetxt(path, np.column_stack([t, tone, noise]), delimiter=",", header=header, comments="", fmt="%.10g")
+    return tone, noise
+
+
+def test_a_csv_index_counts_the_columns_as_written_and_the_time_column_is_no_channel(tmp_path):
+    """Header time_s,acc,noise: sensor = 1 is acc and tacho = 2 noise (they read noise and nothing: the index was
+    counted after the time column was taken out); sensor = 0, the time column, is refused naming it."""
+    f = tmp_path / "r.csv"
+    tone, noise = _csv_time_acc_noise(f)
+    m = load_measurement(f, _side(sensor=1, tacho=2))
+    assert (m.sensor, m.tacho, m.fs_hz) == ("acc", "noise", pytest.approx(FS))
+    np.testing.assert_allclose(m.signal, tone, rtol=1e-9)
+    with pytest.raises(InputError, match=r"sensor: got 0; allowed: a data column: column 0 \(time_s\) is the time "
+                                         r"column.*1 \(acc\), 2 \(noise\)"):
+        load_measurement(f, _side(sensor=0))
+    with pytest.raises(InputError, match=r"sensor: got 3; allowed: a column index in \[0, 2\]"):
+        load_measurement(f, _side(sensor=3))
+
+
+def test_a_headerless_csv_whose_sidecar_names_its_time_column_counts_it_too(tmp_path):
+    """channels = ["t", "acc", "noise"] for a file without names: sensor = 1 is acc, as written."""
+    f = tmp_path / "r.txt"
+    tone, _ = _csv_time_acc_noise(f, header="")
+    f.write_text(f.read_text().lstrip("\n"))
+    m = load_measurement(f, _side(channels=["t", "acc", "noise"], sensor=1))
+    assert (m.sensor, tuple(m.channels)) == ("acc", ("acc", "noise"))
+    np.testing.assert_allclose(m.signal, tone, rtol=1e-9)
+
+
+def test_a_classifier_reads_the_same_channel_for_an_index(tmp_path):
+    """gearpit predict/evaluate read measurement files through models.measurement_files: sensor = 1 of
+    time_s,acc,noise is the tone there too (correlation with the tone > 0.99, with noise < 0.1)."""
+    from models.measurement_files import load_measurement_groups
+
+    f = tmp_path / "r.csv"
+    tone, noise = _csv_time_acc_noise(f)
+    (tmp_path / "r.toml").write_text('speed_rpm = 1500.0\ntorque_nm = 20.0\npair = "spur-gds"\nsensor = 1\n')
+    groups = load_measurement_groups([f], refine_speed=False)
+    x = groups.sets[0].signals[0].astype(float)
+    n = x.size
+    assert abs(np.corrcoef(x, tone[:n])[0, 1]) > 0.99 and abs(np.corrcoef(x, noise[:n])[0, 1]) < 0.1
