@@ -39,7 +39,7 @@ key                        required  meaning
 .. [2] unless the public layout's file name or format gives it.
 
 Refused with :class:`gearpit.errors.InputError` naming the field: unknown keys, a
-missing fs, NaN or infinite samples (first bad sample named), a wrong column count,
+missing fs, NaN or infinite samples (first bad sample named), a wrong column count, two columns of one name,
 a constant sensor channel, a record shorter than two revolutions of the slower shaft.
 """
 from __future__ import annotations
@@ -461,6 +461,11 @@ def load_measurement(path: str | Path, sidecar: Sidecar | str | Path | None = No
             require(abs(rec.fs_hz - sidecar.fs_hz) <= 1e-3 * sidecar.fs_hz, "fs_hz", sidecar.fs_hz,
                     f"the file's own sampling rate {rec.fs_hz:.6g} Hz (or leave fs_hz out)")
         hints["fs_hz"] = rec.fs_hz
+    twice = {c: [i for i, d in enumerate(columns) if d == c] for c in columns if columns.count(c) > 1}
+    require(not twice, f"{p.name}: column names", ", ".join(f"{c!r} (columns {', '.join(map(str, i))})"
+                                                           for c, i in twice.items()),
+            "a distinct name for every column, or a channel would be read in another's place: rename them in the "
+            "file, or name every data column in the sidecar's channels = [...]")
     channels = {name: rec.data[:, i] for i, name in enumerate(names)}
     m = measurement_from_arrays(channels, sidecar, source=str(p), hints=hints, read_as=read_as,
                                 no_index="" if sidecar.channels is not None else rec.no_index, columns=columns)

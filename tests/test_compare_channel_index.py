@@ -132,3 +132,17 @@ def test_a_classifier_reads_the_same_channel_for_an_index(tmp_path):
     x = groups.sets[0].signals[0].astype(float)
     n = x.size
     assert abs(np.corrcoef(x, tone[:n])[0, 1]) > 0.99 and abs(np.corrcoef(x, noise[:n])[0, 1]) < 0.1
+
+
+def test_two_columns_of_one_name_are_refused_naming_them(tmp_path):
+    """Header time_s,acc [g],acc [g]: the second column had replaced the first under the one name, read by name
+    or by index alike; refused naming the name and its columns (as written), whatever selects the sensor; the
+    sidecar's channels name them apart."""
+    f = tmp_path / "r.csv"
+    tone, noise = _csv_time_acc_noise(f, header="time_s,acc [g],acc [g]")
+    for ref in ("acc [g]", 1, 2):
+        with pytest.raises(InputError, match=r"r.csv: column names: got \"'acc \[g\]' \(columns 1, 2\)\""):
+            load_measurement(f, _side(sensor=ref))
+    m = load_measurement(f, _side(channels=["acc_a", "acc_b"], sensor=1))
+    assert (m.sensor, tuple(m.channels)) == ("acc_a", ("acc_a", "acc_b"))
+    np.testing.assert_allclose(m.signal, tone, rtol=1e-9)
