@@ -125,10 +125,9 @@ def read_record(path: str | Path, fmt: str = "auto", *, time_column: str | None 
     if fmt == "csv":
         return read_delimited(p, time_column=time_column, fs_hz=fs_hz)
     if fmt == "npy":
-        return _from_array(np.load(p, allow_pickle=False), None, str(p))
+        return _from_array(_load_numpy(p, "NPY"), None, str(p))
     if fmt == "npz":
-        with np.load(p, allow_pickle=False) as z:
-            return _from_mapping({k: z[k] for k in z.files}, variable, str(p), fs_hz=fs_hz)
+        return _from_mapping(_load_numpy(p, "NPZ"), variable, str(p), fs_hz=fs_hz)
     if fmt == "wav":
         return read_wav(p)
     if fmt == "mat":
@@ -190,6 +189,25 @@ def read_seu(path: Path) -> RawRecord:
 
 
 # ---------------------------------------------------------------------- binary
+def _unreadable(path: Path, kind: str, exc: BaseException) -> InputError:
+    """The one-line error for a file its reader library could not read (truncated, empty, corrupt)."""
+    if "allow_pickle" in str(exc):
+        return InputError("measurement", str(path), f"numeric arrays only ({kind}: it holds an object array, "
+                          "which only unpickling could read, and gearpit never unpickles a file)")
+    return InputError("measurement", str(path), f"a readable {kind} file ({type(exc).__name__}: {exc})")
+
+
+def _load_numpy(path: Path, kind: str):
+    """An NPY array, or an NPZ file's arrays as a dict in the order saved, read whole, never unpickled."""
+    try:
+        if kind == "NPY":
+            return np.load(path, allow_pickle=False)
+        with np.load(path, allow_pickle=False) as z:
+            return {k: z[k] for k in z.files}
+    except Exception as exc:   # noqa: BLE001 - numpy, zipfile and zlib raise many types on a damaged file
+        raise _unreadable(path, kind, exc) from None
+
+
 def _from_array(a: np.ndarray, names, where: str) -> RawRecord:
     a = np.asarray(a)
     require(a.dtype.kind in "fiu" and a.ndim in (1, 2) and a.size > 0, where, f"{a.dtype} {a.shape}",
@@ -304,8 +322,8 @@ def read_mat(path: Path, variable: str | None = None, *, fs_hz: float | None = N
 
     try:
         mapping = scipy.io.loadmat(path, simplify_cells=True)
-    except (NotImplementedError, ValueError) as exc:  # v7.3 is HDF5 (NotImplementedError from scipy)
-        mapping, unordered = _read_hdf5_mat(path, exc)
+    except Exception as exc:   # noqa: BLE001 - v7.3 is HDF5 (NotImplementedError from scipy); a damaged v5 file
+        mapping, unordered = _read_hdf5_mat(path, exc)     # raises anything from OSError to zlib.error
         return _from_mapping(mapping, variable, str(path), fs_hz=fs_hz, unordered=unordered)
     return _from_mapping(mapping, variable, str(path), fs_hz=fs_hz)     # scipy keeps the file's order
 
@@ -316,10 +334,13 @@ def _read_hdf5_mat(path: Path, exc: Exception) -> tuple[dict, frozenset]:
     except ImportError:  # pragma: no cover - h5py is a dependency
         raise InputError("measurement", str(path), "a MAT v7.3 file needs h5py (pip install h5py)") from None
     if not h5py.is_hdf5(path):
-        raise InputError("measurement", str(path), f"a readable MAT file ({exc})") from None
+        raise _unreadable(path, "MAT", exc)
     unordered: set = set()
-    with h5py.File(path, "r") as f:
-        return _hdf5_group(f, h5py, unordered), frozenset(unordered)
+    try:
+        with h5py.File(path, "r") as f:
+            return _hdf5_group(f, h5py, unordered), frozenset(unordered)
+    except Exception as exc73:   # noqa: BLE001 - h5py raises OSError, KeyError, RuntimeError on a damaged file
+        raise _unreadable(path, "MAT v7.3 (HDF5)", exc73) from None
 
 
 def _hdf5_group(group, h5py, unordered: set, path: str = "") -> dict:

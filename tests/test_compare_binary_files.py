@@ -1,0 +1,93 @@
+"""NPY, NPZ and MAT files as they arrive damaged or written by MATLAB: one-line refusals, never a traceback and
+never an unpickled object; MAT v7.3 structs with text and empty fields; the rate stored in the file
+(compare.formats).
+
+Source of truth: the README's table of measurement files ("Refused with one line naming the field") and the MAT
+v7.3 layout MATLAB writes (HDF5; a char array is a uint16 dataset with attribute MATLAB_class = "char", an empty
+array a dataset of its dimensions with MATLAB_empty = 1). Each test writes its own small files.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from compare.measurement import Sidecar, load_measurement
+from gearpit.cli import main
+from gearpit.errors import InputError
+
+FS = 5000.0
+N = 5000   # 1 s: at 1500 rpm the spur-gds wheel turns 7.25 times
+TONE = np.sin(2 * np.pi * 725.0 * np.arange(N) / FS)
+
+
+def _side(**extra):
+    return Sidecar.from_dict({"speed_rpm": 1500.0, "torque_nm": 20.0, "pair": "spur-gds", **extra})
+
+
+class _Marker:
+    """Unpickling this touches a file: proof that a loader unpickled."""
+
+    def __init__(self, path):
+        self.path = str(path)
+
+    def __reduce__(self):
+        return (Path.touch, (Path(self.path),))
+
+
+def _damaged(tmp_path, kind):
+    """A file of ``kind`` as a crash, a copy or a careless save leaves it."""
+    from scipy.io import savemat
+
+    p = tmp_path / f"{kind}.{kind.split('_')[0]}"
+    if kind == "npy_truncated":
+        np.save(p, TONE)
+        p.write_bytes(p.read_bytes()[: p.stat().st_size // 2])
+    elif kind == "npy_empty":
+        p.write_bytes(b"")
+    elif kind == "npy_object":
+        np.save(p, np.array([TONE, _Marker(tmp_path / "unpickled")], dtype=object), allow_pickle=True)
+    elif kind == "npz_object":
+        np.savez(p, acc=TONE, meta=np.array([_Marker(tmp_path / "unpickled")], dtype=object), fs_hz=FS)
+    elif kind == "npz_truncated":
+        np.savez(p, acc=TONE, fs_hz=FS)
+        p.write_bytes(p.read_bytes()[: p.stat().st_size // 2])
+    elif kind == "mat_truncated":
+        savemat(p, {"acc": TONE, "fs": FS})
+        p.write_bytes(p.read_bytes()[: p.stat().st_size // 2])
+    elif kind == "mat_empty":
+        p.write_bytes(b"")
+    elif kind == "mat_v73_truncated":
+        h5py = pytest.importorskip("h5py")
+        with h5py.File(p, "w", userblock_size=512) as f:
+            f["acc"] = TONE[None, :]
+            f["fs"] = np.array([[FS]])
+        p.write_bytes(p.read_bytes()[: p.stat().st_size // 2])
+    return p
+
+
+KINDS = ("npy_truncated", "npy_empty", "npy_object", "npz_object", "npz_truncated", "mat_truncated", "mat_empty",
+         "mat_v73_truncated")
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_a_damaged_or_object_file_is_refused_in_one_line_and_never_unpickled(tmp_path, kind):
+    """Each raised numpy's, scipy's or zipfile's own error (a traceback, exit 1); now an InputError naming the
+    file, and an object array is never unpickled (the marker file it would touch stays absent)."""
+    p = _damaged(tmp_path, kind)
+    allowed = "numeric arrays only" if kind.endswith("object") else "a readable"
+    with pytest.raises(InputError, match=rf"measurement: got '.*{p.name}'; allowed: {allowed}"):
+        load_measurement(p, _side(fs_hz=FS, sensor=0))
+    assert not (tmp_path / "unpickled").exists()
+
+
+@pytest.mark.parametrize("kind", ["npy_truncated", "npz_object", "mat_truncated"])
+def test_gearpit_compare_on_a_damaged_file_exits_2_with_one_line(tmp_path, capsys, kind):
+    """The CLI's promise: exit code 2 and one stderr line naming the file."""
+    p = _damaged(tmp_path, kind)
+    p.with_suffix(".toml").write_text('fs_hz = 5000.0\nspeed_rpm = 1500.0\ntorque_nm = 20.0\npair = "spur-gds"\n'
+                                      'sensor = 0\n')
+    assert main(["compare", str(p), "--no-attribution"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and p.name in err[0]
