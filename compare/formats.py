@@ -14,7 +14,9 @@ Generic layouts
   key, in the order saved); a scalar ``fs_hz`` or ``fs`` entry gives the sampling rate.
 - WAV: :func:`scipy.io.wavfile.read` (integer samples scaled to [-1, 1)).
 - MAT: :func:`scipy.io.loadmat`; v7.3 files (HDF5) through ``h5py``. Numeric
-  variables as in NPZ; a scalar ``fs``, ``fs_hz`` or ``Fs`` gives the sampling rate.
+  variables as in NPZ (text, logical and empty ones are no channel; in v7.3 by their
+  ``MATLAB_class`` and ``MATLAB_empty`` attributes); a scalar ``fs``, ``fs_hz`` or ``Fs`` gives the
+  sampling rate.
 - NPZ and MAT alike: structs (MATLAB structs, HDF5 groups) are flattened, each variable
   named by its own name unless another has it too (then its dotted path, ``run1.acc``), in
   the file's order (MAT v7.3: where the file stores it, else :attr:`RawRecord.no_index`);
@@ -346,7 +348,10 @@ def _read_hdf5_mat(path: Path, exc: Exception) -> tuple[dict, frozenset]:
 def _hdf5_group(group, h5py, unordered: set, path: str = "") -> dict:
     """A MAT v7.3 group (the file, a struct) as nested dicts of its numeric datasets, in the order MATLAB wrote
     them where the file stores it (a struct's ``MATLAB_fields`` attribute, or HDF5 link creation order); the
-    dotted path of a group with more than one member whose order is not stored is added to ``unordered``."""
+    dotted path of a group with more than one member whose order is not stored is added to ``unordered``.
+    A dataset's ``MATLAB_class`` says what it holds: a char array (uint16 code units) is read as text, an empty
+    array (``MATLAB_empty``, stored as its dimensions), a logical or any other class is no data; a dataset without
+    the attribute (written by another HDF5 tool) is data if it is numeric."""
     keys = list(group.keys())       # h5py lists members in creation order where it is tracked, else by name
     fields = [_matlab_text(f) for f in group.attrs.get("MATLAB_fields", ())]
     tracked = (group["/"] if isinstance(group, h5py.File) else group).id.get_create_plist().get_link_creation_order()
@@ -359,9 +364,18 @@ def _hdf5_group(group, h5py, unordered: set, path: str = "") -> dict:
         v = group[k]
         if isinstance(v, h5py.Group) and not k.startswith("#"):
             out[k] = _hdf5_group(v, h5py, unordered, f"{path}.{k}" if path else k)
-        elif isinstance(v, h5py.Dataset) and v.dtype.kind in "fiu":
-            out[k] = np.asarray(v[()]).T  # MATLAB stores column-major
+        elif isinstance(v, h5py.Dataset) and not v.attrs.get("MATLAB_empty", 0):    # [] is stored as its dims
+            cls = _matlab_text(v.attrs.get("MATLAB_class", b""))
+            if cls == "char":                                   # text (uint16 code units), never a channel
+                out[k] = "\n".join("".join(map(chr, row)) for row in np.atleast_2d(np.asarray(v[()]).T))
+            elif cls in MATLAB_NUMERIC_CLASSES + ("",) and v.dtype.kind in "fiu":
+                out[k] = np.asarray(v[()]).T  # MATLAB stores column-major
     return out
+
+
+#: MATLAB classes of numeric arrays (a v7.3 dataset's ``MATLAB_class``): the ones read as data
+MATLAB_NUMERIC_CLASSES = ("double", "single", "int8", "uint8", "int16", "uint16", "int32", "uint32", "int64",
+                          "uint64")
 
 
 def _matlab_text(value) -> str:

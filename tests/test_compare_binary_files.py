@@ -91,3 +91,34 @@ def test_gearpit_compare_on_a_damaged_file_exits_2_with_one_line(tmp_path, capsy
     assert main(["compare", str(p), "--no-attribution"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and p.name in err[0]
+
+
+def _matlab73(path, struct: dict):
+    """A MAT v7.3 file holding one struct ``meas`` as MATLAB writes it: each field a dataset with its
+    MATLAB_class; ``struct`` maps field -> (array as MATLAB holds it, class, empty)."""
+    h5py = pytest.importorskip("h5py")
+    with h5py.File(path, "w", userblock_size=512) as f:
+        g = f.create_group("meas")
+        g.attrs["MATLAB_class"] = np.bytes_("struct")
+        for k, (v, cls, empty) in struct.items():
+            ds = g.create_dataset(k, data=np.asarray(v).T)       # MATLAB stores column-major
+            ds.attrs["MATLAB_class"] = np.bytes_(cls)
+            if empty:
+                ds.attrs["MATLAB_empty"] = np.uint8(1)
+    with open(path, "r+b") as fh:
+        fh.write(b"MATLAB 7.3 MAT-file, Platform: GLNXA64".ljust(116) + b"\0" * 8 + b"\x00\x02IM")
+
+
+def test_a_matlab_v73_struct_with_text_empty_and_logical_fields_reads_its_numeric_fields_only(tmp_path):
+    """meas.acc, meas.fs with meas.unit = 'm/s^2' (char: uint16 code units), meas.comment = [] (stored as its
+    dimensions [0 0] with MATLAB_empty), meas.valid = true(1, n) (logical, uint8): refused before as "1-D arrays
+    of equal length {'acc': 5000, 'unit': 5}" or read with valid as a channel; now acc is the one channel, as
+    from the same struct saved as v5."""
+    unit = np.array([[ord(c) for c in "m/s^2"]], dtype=np.uint16)
+    _matlab73(tmp_path / "r.mat", {"acc": (TONE[None, :], "double", False), "fs": (np.array([[FS]]), "double", False),
+                                   "unit": (unit, "char", False),
+                                   "comment": (np.array([0, 0], dtype=np.uint64), "double", True),
+                                   "valid": (np.ones((1, N), dtype=np.uint8), "logical", False)})
+    m = load_measurement(tmp_path / "r.mat", _side())
+    assert (tuple(m.channels), m.sensor, m.fs_hz) == (("acc",), "acc", FS)
+    np.testing.assert_array_equal(m.signal, TONE)
