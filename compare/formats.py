@@ -11,7 +11,8 @@ Generic layouts
   comma, a byte-order mark, a time column in s/ms/us).
 - NPY: a 1-D array (one channel) or 2-D (the longer axis is time).
 - NPZ: one 2-D array, or several equal-length 1-D arrays (one channel each, named by
-  key, in the order saved); a scalar ``fs_hz`` or ``fs`` entry gives the sampling rate.
+  key, in the order saved); a scalar ``fs_hz`` or ``fs`` entry gives the sampling rate
+  (:data:`FS_KEYS`, a number or a text holding one; several must agree, :func:`_scalar_fs`).
 - WAV: :func:`scipy.io.wavfile.read` (integer samples scaled to [-1, 1)).
 - MAT: :func:`scipy.io.loadmat`; v7.3 files (HDF5) through ``h5py``. Numeric
   variables as in NPZ (text, logical and empty ones are no channel; in v7.3 by their
@@ -223,13 +224,48 @@ def _from_array(a: np.ndarray, names, where: str) -> RawRecord:
     return RawRecord(names, a, None)
 
 
-def _scalar_fs(mapping: dict) -> float | None:
-    for k in FS_KEYS:
-        if k in mapping:
-            v = np.asarray(mapping[k]).astype(float).ravel()
-            require(v.size == 1, k, v.tolist()[:4], "a scalar sampling rate (Hz)")
-            return float(v[0])
-    return None
+def _scalar_fs(mapping: dict, where: str, fs_hz: float | None = None) -> float | None:
+    """The sampling rate (Hz) an NPZ/MAT file states: every entry named as in :data:`FS_KEYS` at any struct depth
+    (``fs``, ``run1.fs``, ``sample_rate``), a number or a text holding one (``"12800"``, ``"12800 Hz"``); None if
+    there is none. Entries that disagree (two structs' ``fs``, ``fs`` and ``sample_rate``) are refused naming
+    each, unless the sidecar's ``fs_hz`` is one of them: None then, the sidecar's rate is used."""
+    found = {path: _rate(v, f"{where}:{path}") for path, v in _leaves(mapping)
+             if path.rsplit(".", 1)[-1] in FS_KEYS}
+    rates = set(found.values())
+    if len(rates) <= 1:
+        return next(iter(rates), None)
+    if fs_hz is not None and any(abs(r - fs_hz) <= 1e-3 * fs_hz for r in rates):
+        return None
+    named = ", ".join(f"{k} = {v:g}" for k, v in found.items())
+    raise InputError(f"{where}: sampling rate", named,
+                     "one rate: these entries of the file disagree, so which is the record's is not known; give it "
+                     "as fs_hz in the sidecar" + (f" (its {fs_hz:g} Hz is none of them)" if fs_hz is not None else ""))
+
+
+def _rate(value, where: str) -> float:
+    """A sampling rate entry as a number (Hz): a numeric scalar, or a text holding one (``"12800"``, ``"12.8e3
+    Hz"``)."""
+    a = np.asarray(value)
+    if a.dtype.kind in "US" and a.size == 1:
+        text = a.ravel()[0]
+        text = text.decode("utf-8", "replace") if isinstance(text, bytes) else str(text)
+        m = re.fullmatch(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(?:hz)?\s*", text, re.IGNORECASE)
+        require(m is not None, where, text, "a sampling rate in Hz: a number, or a text holding one ('12800')")
+        return float(m.group(1))
+    require(a.dtype.kind in "fiu" and a.size == 1, where, a.ravel().tolist()[:4] if a.dtype.kind != "O" else a.dtype,
+            "a scalar sampling rate (Hz)")
+    return float(a.ravel()[0])
+
+
+def _leaves(mapping: dict, prefix: str = ""):
+    """``(dotted path, value)`` of every entry of a file's mapping, structs (dicts) walked into."""
+    for k, v in mapping.items():
+        if k.startswith("__"):
+            continue
+        if isinstance(v, dict):
+            yield from _leaves(v, f"{prefix}{k}.")
+        else:
+            yield prefix + k, v
 
 
 def _flatten(mapping: dict, prefix: str = "") -> dict:
@@ -259,7 +295,7 @@ def _from_mapping(mapping: dict, variable: str | None, where: str, fs_hz: float 
     flat = _flatten(mapping)
     leaf = [k.rsplit(".", 1)[-1] for k in flat]
     named = {(lf if leaf.count(lf) == 1 else k): v for k, lf, v in zip(flat, leaf, flat.values())}
-    fs = _scalar_fs(named)
+    fs = _scalar_fs(mapping, where, fs_hz)
     arrays = {k: v for k, v in named.items() if k not in FS_KEYS and v.size > 1}
     times = [k for k, v in arrays.items() if seconds_per_unit(k.rsplit(".", 1)[-1]) is not None
              and np.squeeze(v).ndim == 1 and k != variable]

@@ -122,3 +122,31 @@ def test_a_matlab_v73_struct_with_text_empty_and_logical_fields_reads_its_numeri
     m = load_measurement(tmp_path / "r.mat", _side())
     assert (tuple(m.channels), m.sensor, m.fs_hz) == (("acc",), "acc", FS)
     np.testing.assert_array_equal(m.signal, TONE)
+
+
+def test_the_rate_an_npz_or_mat_file_states_is_read_as_text_too_and_disagreeing_entries_are_refused(tmp_path):
+    """fs saved as text ("12800") was ignored (refused as no rate); fs = 5000 beside sample_rate = 10000 read the
+    first silently; two structs' fs gave "give fs_hz in the sidecar" without saying why. Now: the text is read;
+    agreeing entries give the rate; disagreeing ones are refused naming each, unless the sidecar's fs_hz is one of
+    them."""
+    from scipy.io import savemat
+
+    np.savez(tmp_path / "text.npz", acc=TONE, fs=np.array("5000"))
+    assert load_measurement(tmp_path / "text.npz", _side()).fs_hz == FS
+    np.savez(tmp_path / "word.npz", acc=TONE, fs=np.array("fast"))
+    with pytest.raises(InputError, match=r"word.npz:fs: got 'fast'; allowed: a sampling rate in Hz"):
+        load_measurement(tmp_path / "word.npz", _side())
+    np.savez(tmp_path / "two.npz", acc=TONE, fs=FS, sample_rate=2 * FS)
+    with pytest.raises(InputError, match=r"two.npz: sampling rate: got 'fs = 5000, sample_rate = 10000'; "
+                                         r"allowed: one rate: these entries of the file disagree.*fs_hz"):
+        load_measurement(tmp_path / "two.npz", _side())
+    assert load_measurement(tmp_path / "two.npz", _side(fs_hz=2 * FS)).fs_hz == 2 * FS
+    with pytest.raises(InputError, match=r"its 7000 Hz is none of them"):
+        load_measurement(tmp_path / "two.npz", _side(fs_hz=7000.0))
+    savemat(tmp_path / "same.mat", {"run1": {"acc": TONE, "fs": FS}, "run2": {"acc": -TONE, "fs": FS}})
+    m = load_measurement(tmp_path / "same.mat", _side(sensor="run1.acc"))
+    assert m.fs_hz == FS
+    np.testing.assert_array_equal(m.signal, TONE)
+    savemat(tmp_path / "differ.mat", {"run1": {"acc": TONE, "fs": FS}, "run2": {"acc": -TONE, "fs": 2 * FS}})
+    with pytest.raises(InputError, match=r"sampling rate: got 'run1.fs = 5000, run2.fs = 10000'"):
+        load_measurement(tmp_path / "differ.mat", _side(sensor="run1.acc"))
