@@ -11,12 +11,16 @@ Generic layouts
   comma, a byte-order mark, a time column in s/ms/us).
 - NPY: a 1-D array (one channel) or 2-D (the longer axis is time).
 - NPZ: one 2-D array, or several equal-length 1-D arrays (one channel each, named by
-  key); a scalar ``fs_hz`` or ``fs`` entry gives the sampling rate.
+  key, in the order saved); a scalar ``fs_hz`` or ``fs`` entry gives the sampling rate
+  (:data:`FS_KEYS`, a number or a text holding one; several must agree, :func:`_scalar_fs`).
 - WAV: :func:`scipy.io.wavfile.read` (integer samples scaled to [-1, 1)).
 - MAT: :func:`scipy.io.loadmat`; v7.3 files (HDF5) through ``h5py``. Numeric
-  variables as in NPZ; a scalar ``fs``, ``fs_hz`` or ``Fs`` gives the sampling rate.
+  variables as in NPZ (text, logical and empty ones are no channel; in v7.3 by their
+  ``MATLAB_class`` and ``MATLAB_empty`` attributes); a scalar ``fs``, ``fs_hz`` or ``Fs`` gives the
+  sampling rate.
 - NPZ and MAT alike: structs (MATLAB structs, HDF5 groups) are flattened, each variable
-  named by its own name unless another has it too (then its dotted path, ``run1.acc``);
+  named by its own name unless another has it too (then its dotted path, ``run1.acc``), in
+  the file's order (MAT v7.3: where the file stores it, else :attr:`RawRecord.no_index`);
   a uniform ``time``/``t`` vector (``time_ms`` ...) gives the rate and is no channel.
 
 Public layouts (``format`` in the sidecar, or recognised by the file name)
@@ -76,12 +80,20 @@ class RawRecord:
     hints : dict
         Operating-point defaults read from the file name or layout
         (``speed_rpm``, ``torque_nm``, ``fault``, ``tacho``, ``sensor``, ``fs_hz``).
+    no_index : str
+        Why a 0-based channel index cannot be read in the file's order (a MAT v7.3 file that does not store the
+        order of its variables); "" where it can: an index counts ``columns`` in the file's order.
+    columns : tuple of str
+        The file's columns as written, a time column the reader took out of ``names`` included: what a 0-based
+        channel index counts (empty: ``names``).
     """
 
     names: tuple
     data: np.ndarray
     fs_hz: float | None = None
     hints: dict = field(default_factory=dict)
+    no_index: str = ""
+    columns: tuple = ()
 
 
 def detect_format(path: Path) -> str:
@@ -116,10 +128,9 @@ def read_record(path: str | Path, fmt: str = "auto", *, time_column: str | None 
     if fmt == "csv":
         return read_delimited(p, time_column=time_column, fs_hz=fs_hz)
     if fmt == "npy":
-        return _from_array(np.load(p, allow_pickle=False), None, str(p))
+        return _from_array(_load_numpy(p, "NPY"), None, str(p))
     if fmt == "npz":
-        with np.load(p, allow_pickle=False) as z:
-            return _from_mapping({k: z[k] for k in z.files}, variable, str(p), fs_hz=fs_hz)
+        return _from_mapping(_load_numpy(p, "NPZ"), variable, str(p), fs_hz=fs_hz)
     if fmt == "wav":
         return read_wav(p)
     if fmt == "mat":
@@ -128,7 +139,7 @@ def read_record(path: str | Path, fmt: str = "auto", *, time_column: str | None 
         rec = read_delimited(p, time_column=time_column, fs_hz=fs_hz)
         return RawRecord(rec.names, rec.data, rec.fs_hz,
                          {"fs_hz": 12800.0, "tacho": "speed", "sensor": "gearbox_vibration_x",
-                          **_mcc5_name_hints(p.name)})
+                          **_mcc5_name_hints(p.name)}, columns=rec.columns)
     if fmt == "phm2023":
         return read_phm2023(p)
     return read_seu(p)
@@ -138,7 +149,9 @@ def read_record(path: str | Path, fmt: str = "auto", *, time_column: str | None 
 def read_delimited(path: Path, *, time_column: str | None = None, skip_text_lines: bool = False,
                    fs_hz: float | None = None) -> RawRecord:
     """Generic CSV/TXT (:mod:`compare.text_records`); ``skip_text_lines`` drops leading non-numeric lines."""
-    return RawRecord(*read_table(path, time_column=time_column, skip_text_lines=skip_text_lines, fs_hz=fs_hz))
+    names, data, fs, columns = read_table(path, time_column=time_column, skip_text_lines=skip_text_lines,
+                                          fs_hz=fs_hz)
+    return RawRecord(names, data, fs, columns=columns)
 
 
 def _mcc5_name_hints(name: str) -> dict:
@@ -179,6 +192,25 @@ def read_seu(path: Path) -> RawRecord:
 
 
 # ---------------------------------------------------------------------- binary
+def _unreadable(path: Path, kind: str, exc: BaseException) -> InputError:
+    """The one-line error for a file its reader library could not read (truncated, empty, corrupt)."""
+    if "allow_pickle" in str(exc):
+        return InputError("measurement", str(path), f"numeric arrays only ({kind}: it holds an object array, "
+                          "which only unpickling could read, and gearpit never unpickles a file)")
+    return InputError("measurement", str(path), f"a readable {kind} file ({type(exc).__name__}: {exc})")
+
+
+def _load_numpy(path: Path, kind: str):
+    """An NPY array, or an NPZ file's arrays as a dict in the order saved, read whole, never unpickled."""
+    try:
+        if kind == "NPY":
+            return np.load(path, allow_pickle=False)
+        with np.load(path, allow_pickle=False) as z:
+            return {k: z[k] for k in z.files}
+    except Exception as exc:   # noqa: BLE001 - numpy, zipfile and zlib raise many types on a damaged file
+        raise _unreadable(path, kind, exc) from None
+
+
 def _from_array(a: np.ndarray, names, where: str) -> RawRecord:
     a = np.asarray(a)
     require(a.dtype.kind in "fiu" and a.ndim in (1, 2) and a.size > 0, where, f"{a.dtype} {a.shape}",
@@ -192,13 +224,48 @@ def _from_array(a: np.ndarray, names, where: str) -> RawRecord:
     return RawRecord(names, a, None)
 
 
-def _scalar_fs(mapping: dict) -> float | None:
-    for k in FS_KEYS:
-        if k in mapping:
-            v = np.asarray(mapping[k]).astype(float).ravel()
-            require(v.size == 1, k, v.tolist()[:4], "a scalar sampling rate (Hz)")
-            return float(v[0])
-    return None
+def _scalar_fs(mapping: dict, where: str, fs_hz: float | None = None) -> float | None:
+    """The sampling rate (Hz) an NPZ/MAT file states: every entry named as in :data:`FS_KEYS` at any struct depth
+    (``fs``, ``run1.fs``, ``sample_rate``), a number or a text holding one (``"12800"``, ``"12800 Hz"``); None if
+    there is none. Entries that disagree (two structs' ``fs``, ``fs`` and ``sample_rate``) are refused naming
+    each, unless the sidecar's ``fs_hz`` is one of them: None then, the sidecar's rate is used."""
+    found = {path: _rate(v, f"{where}:{path}") for path, v in _leaves(mapping)
+             if path.rsplit(".", 1)[-1] in FS_KEYS}
+    rates = set(found.values())
+    if len(rates) <= 1:
+        return next(iter(rates), None)
+    if fs_hz is not None and any(abs(r - fs_hz) <= 1e-3 * fs_hz for r in rates):
+        return None
+    named = ", ".join(f"{k} = {v:g}" for k, v in found.items())
+    raise InputError(f"{where}: sampling rate", named,
+                     "one rate: these entries of the file disagree, so which is the record's is not known; give it "
+                     "as fs_hz in the sidecar" + (f" (its {fs_hz:g} Hz is none of them)" if fs_hz is not None else ""))
+
+
+def _rate(value, where: str) -> float:
+    """A sampling rate entry as a number (Hz): a numeric scalar, or a text holding one (``"12800"``, ``"12.8e3
+    Hz"``)."""
+    a = np.asarray(value)
+    if a.dtype.kind in "US" and a.size == 1:
+        text = a.ravel()[0]
+        text = text.decode("utf-8", "replace") if isinstance(text, bytes) else str(text)
+        m = re.fullmatch(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(?:hz)?\s*", text, re.IGNORECASE)
+        require(m is not None, where, text, "a sampling rate in Hz: a number, or a text holding one ('12800')")
+        return float(m.group(1))
+    require(a.dtype.kind in "fiu" and a.size == 1, where, a.ravel().tolist()[:4] if a.dtype.kind != "O" else a.dtype,
+            "a scalar sampling rate (Hz)")
+    return float(a.ravel()[0])
+
+
+def _leaves(mapping: dict, prefix: str = ""):
+    """``(dotted path, value)`` of every entry of a file's mapping, structs (dicts) walked into."""
+    for k, v in mapping.items():
+        if k.startswith("__"):
+            continue
+        if isinstance(v, dict):
+            yield from _leaves(v, f"{prefix}{k}.")
+        else:
+            yield prefix + k, v
 
 
 def _flatten(mapping: dict, prefix: str = "") -> dict:
@@ -219,13 +286,16 @@ def _flatten(mapping: dict, prefix: str = "") -> dict:
     return out
 
 
-def _from_mapping(mapping: dict, variable: str | None, where: str, fs_hz: float | None = None) -> RawRecord:
-    """Numeric variables of an NPZ/MAT file; nested structs flattened (a variable keeps its own name when no other
-    leaf has it, else its dotted path); a scalar ``fs`` or a uniform ``time``/``t`` vector gives the rate."""
+def _from_mapping(mapping: dict, variable: str | None, where: str, fs_hz: float | None = None,
+                  unordered: frozenset = frozenset()) -> RawRecord:
+    """Numeric variables of an NPZ/MAT file, in the file's order (``mapping``'s); nested structs flattened (a
+    variable keeps its own name when no other leaf has it, else its dotted path); a scalar ``fs`` or a uniform
+    ``time``/``t`` vector gives the rate. ``unordered``: dotted paths of the structs (``""``: the file) whose
+    members' order the file does not store; channels that only they order get no index (:attr:`RawRecord.no_index`)."""
     flat = _flatten(mapping)
     leaf = [k.rsplit(".", 1)[-1] for k in flat]
     named = {(lf if leaf.count(lf) == 1 else k): v for k, lf, v in zip(flat, leaf, flat.values())}
-    fs = _scalar_fs(named)
+    fs = _scalar_fs(mapping, where, fs_hz)
     arrays = {k: v for k, v in named.items() if k not in FS_KEYS and v.size > 1}
     times = [k for k, v in arrays.items() if seconds_per_unit(k.rsplit(".", 1)[-1]) is not None
              and np.squeeze(v).ndim == 1 and k != variable]
@@ -251,8 +321,22 @@ def _from_mapping(mapping: dict, variable: str | None, where: str, fs_hz: float 
             "one 2-D array, or 1-D arrays of equal length (else name one with 'variable')")
     lengths = {v.size for v in vectors.values()}
     require(len(lengths) == 1, where, {k: v.size for k, v in vectors.items()}, "1-D arrays of equal length")
-    names = tuple(sorted(vectors))
-    return RawRecord(names, np.column_stack([vectors[k].astype(float) for k in names]), fs)
+    names = tuple(vectors)       # the file's order: a column index counts them as written
+    paths = {k: p for k, p in zip(named, flat)}
+    unknown = sorted({_common_struct(paths[a], paths[b]) for i, a in enumerate(names) for b in names[i + 1:]}
+                     & set(unordered))
+    no_index = ("this MAT v7.3 (HDF5) file does not store the order of "
+                + " or ".join(f"struct {u}'s fields" if u else "its variables" for u in unknown)) if unknown else ""
+    return RawRecord(names, np.column_stack([vectors[k].astype(float) for k in names]), fs, no_index=no_index)
+
+
+def _common_struct(a: str, b: str) -> str:
+    """The dotted path of the innermost struct holding both leaves ``a`` and ``b`` (``""``: the file's top level)."""
+    pa, pb = a.split(".")[:-1], b.split(".")[:-1]
+    n = 0
+    while n < min(len(pa), len(pb)) and pa[n] == pb[n]:
+        n += 1
+    return ".".join(pa[:n])
 
 
 def read_wav(path: Path) -> RawRecord:
@@ -276,28 +360,63 @@ def read_mat(path: Path, variable: str | None = None, *, fs_hz: float | None = N
 
     try:
         mapping = scipy.io.loadmat(path, simplify_cells=True)
-    except (NotImplementedError, ValueError) as exc:  # v7.3 is HDF5 (NotImplementedError from scipy)
-        mapping = _read_hdf5_mat(path, exc)
-    return _from_mapping(mapping, variable, str(path), fs_hz=fs_hz)
+    except Exception as exc:   # noqa: BLE001 - v7.3 is HDF5 (NotImplementedError from scipy); a damaged v5 file
+        mapping, unordered = _read_hdf5_mat(path, exc)     # raises anything from OSError to zlib.error
+        return _from_mapping(mapping, variable, str(path), fs_hz=fs_hz, unordered=unordered)
+    return _from_mapping(mapping, variable, str(path), fs_hz=fs_hz)     # scipy keeps the file's order
 
 
-def _read_hdf5_mat(path: Path, exc: Exception) -> dict:
+def _read_hdf5_mat(path: Path, exc: Exception) -> tuple[dict, frozenset]:
     try:
         import h5py
     except ImportError:  # pragma: no cover - h5py is a dependency
         raise InputError("measurement", str(path), "a MAT v7.3 file needs h5py (pip install h5py)") from None
     if not h5py.is_hdf5(path):
-        raise InputError("measurement", str(path), f"a readable MAT file ({exc})") from None
-    with h5py.File(path, "r") as f:
-        return _hdf5_group(f, h5py)
+        raise _unreadable(path, "MAT", exc)
+    unordered: set = set()
+    try:
+        with h5py.File(path, "r") as f:
+            return _hdf5_group(f, h5py, unordered), frozenset(unordered)
+    except Exception as exc73:   # noqa: BLE001 - h5py raises OSError, KeyError, RuntimeError on a damaged file
+        raise _unreadable(path, "MAT v7.3 (HDF5)", exc73) from None
 
 
-def _hdf5_group(group, h5py) -> dict:
-    """A MAT v7.3 group (the file, a struct) as nested dicts of its numeric datasets."""
+def _hdf5_group(group, h5py, unordered: set, path: str = "") -> dict:
+    """A MAT v7.3 group (the file, a struct) as nested dicts of its numeric datasets, in the order MATLAB wrote
+    them where the file stores it (a struct's ``MATLAB_fields`` attribute, or HDF5 link creation order); the
+    dotted path of a group with more than one member whose order is not stored is added to ``unordered``.
+    A dataset's ``MATLAB_class`` says what it holds: a char array (uint16 code units) is read as text, an empty
+    array (``MATLAB_empty``, stored as its dimensions), a logical or any other class is no data; a dataset without
+    the attribute (written by another HDF5 tool) is data if it is numeric."""
+    keys = list(group.keys())       # h5py lists members in creation order where it is tracked, else by name
+    fields = [_matlab_text(f) for f in group.attrs.get("MATLAB_fields", ())]
+    tracked = (group["/"] if isinstance(group, h5py.File) else group).id.get_create_plist().get_link_creation_order()
+    if fields and set(keys) <= set(fields):
+        keys = [k for k in fields if k in keys]
+    elif not tracked and len(keys) > 1:
+        unordered.add(path)
     out = {}
-    for k, v in group.items():
+    for k in keys:
+        v = group[k]
         if isinstance(v, h5py.Group) and not k.startswith("#"):
-            out[k] = _hdf5_group(v, h5py)
-        elif isinstance(v, h5py.Dataset) and v.dtype.kind in "fiu":
-            out[k] = np.asarray(v[()]).T  # MATLAB stores column-major
+            out[k] = _hdf5_group(v, h5py, unordered, f"{path}.{k}" if path else k)
+        elif isinstance(v, h5py.Dataset) and not v.attrs.get("MATLAB_empty", 0):    # [] is stored as its dims
+            cls = _matlab_text(v.attrs.get("MATLAB_class", b""))
+            if cls == "char":                                   # text (uint16 code units), never a channel
+                out[k] = "\n".join("".join(map(chr, row)) for row in np.atleast_2d(np.asarray(v[()]).T))
+            elif cls in MATLAB_NUMERIC_CLASSES + ("",) and v.dtype.kind in "fiu":
+                out[k] = np.asarray(v[()]).T  # MATLAB stores column-major
     return out
+
+
+#: MATLAB classes of numeric arrays (a v7.3 dataset's ``MATLAB_class``): the ones read as data
+MATLAB_NUMERIC_CLASSES = ("double", "single", "int8", "uint8", "int16", "uint16", "int32", "uint32", "int64",
+                          "uint64")
+
+
+def _matlab_text(value) -> str:
+    """A name as MATLAB stores it in an HDF5 attribute (an array of single bytes, bytes or str)."""
+    if isinstance(value, np.ndarray):
+        return b"".join(np.asarray(value).ravel().tolist()).decode("utf-8", "replace") if value.dtype.kind == "S" \
+            else "".join(map(str, value.ravel().tolist()))
+    return value.decode("utf-8", "replace") if isinstance(value, bytes) else str(value)

@@ -10,7 +10,8 @@ key                        required  meaning
 ``speed_rpm``              [2]_      nominal pinion (input) speed (rpm); refined from the data
 ``torque_nm``              [2]_      pinion (input) torque (N m)
 ``pair``                   yes       preset name (``"spur-gds"``) or a pair table as in a pair TOML
-``sensor``                 [2]_      the vibration channel: name or 0-based column index
+``sensor``                 [2]_      the vibration channel: name or 0-based index in the file's order
+                                     (README, "A channel index")
 ``sensor_quantity``        no        what the sensor measures: ``"acceleration"`` (default),
                                      ``"velocity"`` or ``"displacement"`` (read as acceleration:
                                      :func:`features.derivative.derivative`)
@@ -45,7 +46,7 @@ key                        required  meaning
 .. [2] unless the public layout's file name or format gives it.
 
 Refused with :class:`gearpit.errors.InputError` naming the field: unknown keys, a
-missing fs, NaN or infinite samples (first bad sample named), a wrong column count,
+missing fs, NaN or infinite samples (first bad sample named), a wrong column count, two columns of one name,
 a constant sensor channel, a record shorter than two revolutions of the slower shaft.
 """
 from __future__ import annotations
@@ -325,19 +326,31 @@ class Measurement:
         return None if self.tacho is None else self.channels[self.tacho]
 
 
-def _channel(ref, names: tuple, where: str) -> str:
+def _channel(ref, names: tuple, where: str, no_index: str = "", columns: tuple = ()) -> str:
+    """The channel ``ref`` (a name, or a 0-based index in the file's order) names. ``columns``: the file's columns
+    as written, a time column included (:attr:`compare.formats.RawRecord.columns`; empty: ``names``), which an
+    index counts, and an index at the time column is refused; ``no_index``: why the file's order is not known
+    (:attr:`compare.formats.RawRecord.no_index`), which refuses an index."""
     if isinstance(ref, int):
-        require(ref < len(names), where, ref, f"a column index in [0, {len(names) - 1}]")
-        return names[ref]
+        require(not no_index, where, ref, f"a channel name ({no_index}, so a column index could name the wrong "
+                "channel): one of " + ", ".join(names))
+        cols = tuple(columns) or names
+        require(ref < len(cols), where, ref, f"a column index in [0, {len(cols) - 1}] (the file's columns as "
+                "written: " + ", ".join(cols) + ")")
+        require(cols[ref] in names, where, ref, f"a data column: column {ref} ({cols[ref]}) is the time column, "
+                "read as the time axis, not a channel; one of " + ", ".join(f"{cols.index(n)} ({n})" for n in names))
+        return cols[ref]
     require(ref in names, where, ref, "one of: " + ", ".join(names))
     return ref
 
 
 def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "arrays",
-                            hints: dict | None = None, read_as: str = "acceleration") -> Measurement:
+                            hints: dict | None = None, read_as: str = "acceleration",
+                            no_index: str = "", columns: tuple = ()) -> Measurement:
     """Validate channels (name -> 1-D array) against a sidecar; the one place all checks live. ``read_as``: the
     quantity the sensor channel is brought to (one of :data:`SENSOR_QUANTITIES`, differentiated from the sidecar's
-    ``sensor_quantity``; never integrated)."""
+    ``sensor_quantity``; never integrated). A channel index counts ``columns`` (the file's columns as written, a
+    time column included; empty: ``channels`` in their order); ``no_index``: why it cannot (:func:`_channel`)."""
     hints = hints or {}
     names = tuple(channels)
     require(names, "channels", "none", "at least one channel")
@@ -356,9 +369,9 @@ def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "
     if sensor_ref is None and len(names) == 1:
         sensor_ref = names[0]
     require(sensor_ref is not None, "sensor", None, "which channel is the sensor: one of " + ", ".join(names))
-    sensor = _channel(sensor_ref, names, "sensor")
+    sensor = _channel(sensor_ref, names, "sensor", no_index, columns)
     tacho_ref = sidecar.tacho if sidecar.tacho is not None else hints.get("tacho")
-    tacho = _channel(tacho_ref, names, "tacho") if tacho_ref is not None else None
+    tacho = _channel(tacho_ref, names, "tacho", no_index, columns) if tacho_ref is not None else None
     require(tacho != sensor, "tacho", tacho, "a channel other than the sensor")
     data = {k: np.asarray(v, dtype=float).ravel() for k, v in channels.items()}
     pair = sidecar.pair
@@ -403,6 +416,15 @@ def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "
     return Measurement(channels=data, fs_hz=float(fs), sensor=sensor, tacho=tacho, speed_rpm=float(speed),
                        torque_nm=float(torque), pair=pair, sidecar=sidecar, source=source, fault=fault,
                        secondary=secondary)
+
+
+def _columns_as_written(rec, names: tuple) -> tuple:
+    """The sidecar's ``names`` of ``rec``'s data columns, with a time column the reader took out
+    (:attr:`compare.formats.RawRecord.columns`) put back in its place: the file's columns as written."""
+    if len(rec.columns) <= len(rec.names):
+        return tuple(names)
+    i = next((j for j, (a, b) in enumerate(zip(rec.columns, rec.names)) if a != b), len(rec.names))
+    return tuple(names[:i]) + (rec.columns[i],) + tuple(names[i:])
 
 
 def _time_from_channels(rec, names: tuple, time_column: str | None, where: str, fs_hz: float | None = None):
@@ -455,11 +477,12 @@ def load_measurement(path: str | Path, sidecar: Sidecar | str | Path | None = No
     named_by_sidecar = sidecar.channels is not None and sidecar.time_column in sidecar.channels
     rec = read_record(p, sidecar.format, time_column=None if named_by_sidecar else sidecar.time_column,
                       variable=sidecar.variable, fs_hz=sidecar.fs_hz)
-    names = rec.names
+    names, columns = rec.names, rec.columns or rec.names
     if sidecar.channels is not None:
         require(len(sidecar.channels) == rec.data.shape[1], "channels", list(sidecar.channels),
                 f"{rec.data.shape[1]} names, one per data column of {p.name}")
         names = sidecar.channels
+        columns = _columns_as_written(rec, names)
         rec = _time_from_channels(rec, names, sidecar.time_column, p.name, sidecar.fs_hz)
         names = rec.names
     hints = dict(rec.hints)
@@ -468,6 +491,12 @@ def load_measurement(path: str | Path, sidecar: Sidecar | str | Path | None = No
             require(abs(rec.fs_hz - sidecar.fs_hz) <= 1e-3 * sidecar.fs_hz, "fs_hz", sidecar.fs_hz,
                     f"the file's own sampling rate {rec.fs_hz:.6g} Hz (or leave fs_hz out)")
         hints["fs_hz"] = rec.fs_hz
+    twice = {c: [i for i, d in enumerate(columns) if d == c] for c in columns if columns.count(c) > 1}
+    require(not twice, f"{p.name}: column names", ", ".join(f"{c!r} (columns {', '.join(map(str, i))})"
+                                                           for c, i in twice.items()),
+            "a distinct name for every column, or a channel would be read in another's place: rename them in the "
+            "file, or name every data column in the sidecar's channels = [...]")
     channels = {name: rec.data[:, i] for i, name in enumerate(names)}
-    m = measurement_from_arrays(channels, sidecar, source=str(p), hints=hints, read_as=read_as)
+    m = measurement_from_arrays(channels, sidecar, source=str(p), hints=hints, read_as=read_as,
+                                no_index="" if sidecar.channels is not None else rec.no_index, columns=columns)
     return replace(m, sidecar_path=sidecar_path)

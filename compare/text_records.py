@@ -101,8 +101,9 @@ def times_to_fs(t: np.ndarray, where: str, *, unit_s: float = 1.0) -> float:
 
 
 def read_table(path: Path, *, time_column: str | None = None, skip_text_lines: bool = False,
-               fs_hz: float | None = None) -> tuple[tuple, np.ndarray, float | None]:
-    """``(names, data, fs_hz)`` of a delimited text file (module docstring); ``skip_text_lines`` drops every
+               fs_hz: float | None = None) -> tuple[tuple, np.ndarray, float | None, tuple]:
+    """``(names, data, fs_hz, columns)`` of a delimited text file (module docstring): ``columns`` the names of its
+    columns as written, the time column included (what a 0-based column index counts); ``skip_text_lines`` drops every
     leading line that is not a row of at least two numbers (layouts with free-text preambles); ``fs_hz``: the
     sidecar's rate, which a time column that is not uniform leaves in place of refusing the file."""
     lines = path.read_text(encoding="utf-8-sig", errors="replace").splitlines()
@@ -152,12 +153,12 @@ def read_table(path: Path, *, time_column: str | None = None, skip_text_lines: b
     else:
         tcol = next((i for i, n in enumerate(names) if seconds_per_unit(n) is not None), None)
         scale = seconds_per_unit(names[tcol]) if tcol is not None else None
-    fs = None
+    fs, columns = None, names
     if tcol is not None:
         fs = column_fs(data[:, tcol], f"{path}: column {names[tcol]}", unit_s=scale, fs_hz=fs_hz)
         data = np.delete(data, tcol, axis=1)
         names = names[:tcol] + names[tcol + 1:]
-    return names, data, fs
+    return names, data, fs, columns
 
 
 def column_fs(t: np.ndarray, where: str, *, unit_s: float = 1.0, fs_hz: float | None = None) -> float | None:
