@@ -47,10 +47,11 @@ SCHEMA = {
                            "speed_rpm_nominal": {"type": "number"},
                            "speed_method": {"enum": ["tacho", "spectrum", "nominal"]},
                            "speed_drift_rad": {"type": ["number", "null"],
-                                               "description": "without a tachometer: RMS deviation of the slow "
-                                                              "mesh phase from a constant speed (rad, first mesh "
-                                                              "harmonic; compare.speed.drift_track); null: not "
-                                                              "measured (tachometer, or no two clear harmonics)"},
+                                               "description": "RMS deviation of the slow mesh phase from a "
+                                                              "constant speed (rad, first mesh harmonic): from the "
+                                                              "tachometer's pulses, or without one from two mesh "
+                                                              "harmonics (compare.speed.drift_track); null: not "
+                                                              "measured (no two clear harmonics)"},
                            "speed_tracked": {"type": "boolean",
                                              "description": "the measurement's views follow that drift"},
                            "speed_search_fraction": {"type": ["number", "null"],

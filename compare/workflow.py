@@ -189,8 +189,10 @@ def _run_locked(measurement, measurement_path, mpath: Path, *, add, plugins, att
     if (msg := speed_message(ref.speed)) is not None:
         messages.append(msg)
     if ref.speed.tracked:
+        source = ("the tachometer's pulses" if ref.speed.method == "tacho"
+                  else "two mesh harmonics that agree")
         messages.append(f"the speed drifts within the record ({ref.speed.drift_rad:.2f} rad RMS of the mesh phase, "
-                        "slower than half the wheel's rotation; read from two mesh harmonics that agree): the "
+                        f"slower than half the wheel's rotation; read from {source}): the "
                         "measurement's views follow it, the model runs at the mean speed")
     if measurement.sidecar.sensor_quantity != "acceleration":
         messages.append(f"the sensor measures {measurement.sidecar.sensor_quantity}: read as acceleration "
