@@ -12,8 +12,10 @@ What a logger or a spreadsheet export puts around the numbers, and how it is rea
 - a time column: named ``time``, ``time_s``, ``t`` (or the sidecar's ``time_column``), with its unit in the
   name where it is not seconds (``time_ms``, ``Time [ms]``, ``t (us)``), converted to seconds here: fs = 1 / the
   least-squares step over all samples (:func:`times_to_fs`), refused unless every step lies within the column's
-  written resolution of it (a gap, a repeated or jittering time) - unless the sidecar gives ``fs_hz``, which is
-  then the rate and the column is only dropped.
+  written resolution of it (a repeated or jittering time) - unless the sidecar gives ``fs_hz``, which is then the
+  rate and the column is only dropped. A gap (a step longer than :data:`GAP_STEPS` sample periods beyond the
+  written resolution: samples missing) is refused in every case, naming its time and size: the record on either
+  side of it is out of phase, and no rate bridges it (:class:`TimeGapError`).
 
 Anything else that is not a number (a unit row under the header, a text cell among the data) is refused with
 the line and what was found, never guessed at.
@@ -35,7 +37,15 @@ TIME_COLUMNS = ("time", "time_s", "t", "times", "time_sec")
 _TIME_UNIT = re.compile(r"^(?:time|t)\s*(?:[_/]\s*|\[\s*|\(\s*)(s|sec|ms|us|µs|ns)\s*[\])]?$", re.IGNORECASE)
 _SECONDS = {"s": 1.0, "sec": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "ns": 1e-9}
 _COMMENT = ("#", "%", "//")
+#: a step of the time column longer than this many sample periods (beyond its written resolution) is a gap:
+#: at least one sample is missing there (half a period more than one: a jitter, however large, stays below it)
+GAP_STEPS = 1.5
 _DECIMAL_COMMA = re.compile(r"^[+-]?\d*,\d+(?:[eE][+-]?\d+)?$")
+
+
+class TimeGapError(InputError):
+    """A time column with a gap: samples are missing (:func:`times_to_fs`); refused even where the sidecar gives
+    ``fs_hz`` (:func:`column_fs`)."""
 
 
 def seconds_per_unit(name: str) -> float | None:
@@ -66,7 +76,10 @@ def times_to_fs(t: np.ndarray, where: str, *, unit_s: float = 1.0) -> float:
     written to 7 decimals at 12.8 kHz has steps of 78 and 79 us, median 78). Refused unless finite, increasing and
     uniform to the column's written resolution: every step within the resolution of the last printed digit
     (:func:`written_resolution`; two roundings of half a digit each) plus the float rounding of ``t``, of
-    ``T``; a gap or a jitter beyond it is refused, with the advice to give ``fs_hz`` in the sidecar. A column
+    ``T``; a jitter beyond it is refused, with the advice to give ``fs_hz`` in the sidecar. A gap (a step over
+    :data:`GAP_STEPS` periods, the period being the median step, or ``T`` where the median step is within the
+    resolution, beyond the resolution) is refused as :class:`TimeGapError`, naming where it starts (in the
+    column's unit and in s) and how many samples are missing there. A column
     written to ``d`` decimals gives the rate to ``fs res / duration`` at worst; it is rounded to the power of ten
     below that (``12799.99964`` from a 0.5 s column written to 10 us -> 12800.0), so that the digits beyond what
     the column holds do not count as a different rate.
@@ -85,6 +98,7 @@ def times_to_fs(t: np.ndarray, where: str, *, unit_s: float = 1.0) -> float:
     step = float(np.dot(k, t - t.mean()) / np.dot(k, k))          # least squares: t = t0 + step k
     tol = written_resolution(t) + 8 * eps * float(np.max(np.abs(t)))
     dt = np.diff(t)
+    _refuse_gaps(t, dt, step, tol, where, unit_s)
     worst = int(np.argmax(np.abs(dt - step)))
     if not (step > 0 and float(np.min(dt)) > 0 and abs(dt[worst] - step) <= tol + 1e-9 * step):
         bad = int(np.argmin(dt)) if step <= 0 or float(np.min(dt)) <= 0 else worst
@@ -98,6 +112,28 @@ def times_to_fs(t: np.ndarray, where: str, *, unit_s: float = 1.0) -> float:
         grid = 10.0 ** np.floor(np.log10(fs * res / (t[-1] - t[0])))
         fs = float(np.round(fs / grid) * grid)
     return fs
+
+
+def _refuse_gaps(t: np.ndarray, dt: np.ndarray, step: float, tol: float, where: str, unit_s: float) -> None:
+    """Raise :class:`TimeGapError` at the first step of ``t`` longer than :data:`GAP_STEPS` sample periods plus
+    ``tol`` (:func:`times_to_fs`)."""
+    median = float(np.median(dt))
+    period = median if median > tol else step
+    if not period > 0:
+        return
+    gaps = np.flatnonzero(dt > GAP_STEPS * period + tol)
+    if gaps.size == 0:
+        return
+    i = int(gaps[0])
+    missing = int(round(dt[i] / period)) - 1
+    more = f"; {gaps.size} gaps in all" if gaps.size > 1 else ""
+    at = f"t = {t[i]:.9g}" + (" s" if unit_s == 1.0 else f" ({t[i] * unit_s:.9g} s)")
+    raise TimeGapError(where, f"a gap after {at} (step {i} -> {i + 1}): {dt[i] * unit_s * 1e3:.6g} ms, i.e. about "
+                       f"{missing} missing sample{'s' if missing != 1 else ''} at the period {period * unit_s:.6g} s"
+                       f"{more}",
+                       "a record without gaps: samples are missing there, so the record after it is out of phase "
+                       "with the one before (not clock jitter; fs_hz in the sidecar does not bridge it): keep the "
+                       "part before or after the gap in the file, or fill it at the acquisition")
 
 
 def read_table(path: Path, *, time_column: str | None = None, skip_text_lines: bool = False,
@@ -161,10 +197,12 @@ def read_table(path: Path, *, time_column: str | None = None, skip_text_lines: b
 
 
 def column_fs(t: np.ndarray, where: str, *, unit_s: float = 1.0, fs_hz: float | None = None) -> float | None:
-    """:func:`times_to_fs` of a time column; where it is refused and the sidecar gives ``fs_hz``, None (the
-    sidecar's rate is used)."""
+    """:func:`times_to_fs` of a time column; where it is refused for a jitter and the sidecar gives ``fs_hz``, None
+    (the sidecar's rate is used); a gap is refused in every case (:class:`TimeGapError`)."""
     try:
         return times_to_fs(t, where, unit_s=unit_s)
+    except TimeGapError:
+        raise
     except InputError:
         if fs_hz is None:
             raise
@@ -231,4 +269,4 @@ def _parse_rows(lines: list[str], delim: str | None, where: str, first_line_no: 
     return np.asarray(rows, dtype=float)
 
 
-__all__ = ["TIME_COLUMNS", "column_fs", "parse_number", "read_table", "seconds_per_unit", "times_to_fs", "written_resolution"]
+__all__ = ["GAP_STEPS", "TIME_COLUMNS", "TimeGapError", "column_fs", "parse_number", "read_table", "seconds_per_unit", "times_to_fs", "written_resolution"]

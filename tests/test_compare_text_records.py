@@ -165,22 +165,44 @@ def test_a_time_column_rounded_to_its_printed_decimals_gives_the_true_rate(tmp_p
     np.testing.assert_allclose(rec.data[:, 0], a)
 
 
-def test_a_gap_or_a_jitter_beyond_the_written_resolution_is_still_refused_and_fs_hz_suggested(tmp_path):
-    """Rounding to the printed digits is allowed, a missing sample or a 0.3 % jitter at 7 decimals is not; the
-    message says to give fs_hz in the sidecar, and a sidecar that gives it is then used in place of the column."""
+def test_a_jitter_beyond_the_written_resolution_is_refused_and_fs_hz_suggested(tmp_path):
+    """Rounding to the printed digits is allowed, a 0.3 % jitter at 7 decimals is not; the message says to give
+    fs_hz in the sidecar, and a sidecar that gives it is then used in place of the column."""
     from compare.measurement import Sidecar, load_measurement
 
     fs = 12800.0
     t = np.round(np.arange(6400) / fs, 7)
     rng = np.random.default_rng(1)
     a = np.round(rng.standard_normal(6400), 4)
-    for kind, tt, aa in (("gap", np.delete(t, 3000), np.delete(a, 3000)),
-                         ("jitter", t + np.round(rng.normal(0.0, 2.5e-7, t.size), 7), a)):
-        p = tmp_path / f"{kind}.csv"
-        p.write_text("time_s,acc\n" + "\n".join(f"{x:.7f},{y:.4f}" for x, y in zip(tt, aa)) + "\n")
-        with pytest.raises(InputError, match="non-uniform") as exc:
-            read_record(p)
-        assert "give fs_hz in the sidecar" in str(exc.value)
-        m = load_measurement(p, Sidecar.from_dict({"pair": "spur-gds", "speed_rpm": 1000.0, "torque_nm": 40.0,
-                                                   "fs_hz": fs, "sensor": "acc"}))
-        assert m.fs_hz == fs and m.channels.keys() == {"acc"}
+    tt = t + np.round(rng.normal(0.0, 2.5e-7, t.size), 7)
+    p = tmp_path / "jitter.csv"
+    p.write_text("time_s,acc\n" + "\n".join(f"{x:.7f},{y:.4f}" for x, y in zip(tt, a)) + "\n")
+    with pytest.raises(InputError, match="non-uniform") as exc:
+        read_record(p)
+    assert "give fs_hz in the sidecar" in str(exc.value)
+    m = load_measurement(p, Sidecar.from_dict({"pair": "spur-gds", "speed_rpm": 1000.0, "torque_nm": 40.0,
+                                               "fs_hz": fs, "sensor": "acc"}))
+    assert m.fs_hz == fs and m.channels.keys() == {"acc"}
+
+
+@pytest.mark.parametrize("missing,name,scale", [(1, "time_s", 1.0), (100, "time_s", 1.0), (100, "time_ms", 1e3)])
+def test_a_gap_in_the_time_column_is_refused_naming_its_time_and_size_even_with_fs_hz(tmp_path, missing, name,
+                                                                                       scale):
+    """Missing samples are a phase jump, not clock jitter: before, a sidecar giving fs_hz had the column dropped and
+    the two parts spliced without a word (the audit's gap_fs.csv, 100 samples missing). Now refused with or without
+    fs_hz, naming where the gap starts and how many samples are missing; a jitter with fs_hz stays accepted (above)."""
+    from compare.measurement import Sidecar, load_measurement
+
+    fs = 12800.0
+    keep = np.r_[0:3000, 3000 + missing:6400]
+    t = np.round(np.arange(6400) / fs * scale, 7)[keep]
+    a = np.round(np.random.default_rng(2).standard_normal(6400), 4)[keep]
+    p = tmp_path / "gap.csv"
+    p.write_text(f"{name},acc\n" + "\n".join(f"{x:.7f},{y:.4f}" for x, y in zip(t, a)) + "\n")
+    side = {"pair": "spur-gds", "speed_rpm": 1000.0, "torque_nm": 40.0, "sensor": "acc"}
+    for sidecar in (side, {**side, "fs_hz": fs}):
+        with pytest.raises(InputError, match="gap") as exc:
+            load_measurement(p, Sidecar.from_dict(sidecar))
+        msg = str(exc.value)
+        assert f"about {missing} missing sample" in msg and "step 2999 -> 3000" in msg
+        assert "0.2342969" in msg or "(0.234296875 s)" in msg      # where it starts: 2999 / fs
