@@ -51,7 +51,8 @@ from typing import Any
 
 import numpy as np
 
-from compare.formats import FORMATS, read_record
+from compare.formats import FORMATS, FS_KEYS, read_record
+from compare.text_records import MIN_FS_HZ
 from gearpit.errors import InputError, require, require_positive
 from gearpit.tomlio import check_keys, read_toml
 
@@ -309,6 +310,23 @@ def _channel(ref, names: tuple, where: str) -> str:
     return ref
 
 
+def fs_source(sidecar: Sidecar, source: str) -> str:
+    """Where the sampling rate of a measurement read from ``source`` with ``sidecar`` came from, for the messages
+    that question it (a rate below :data:`MIN_FS_HZ`, a mesh frequency above the Nyquist frequency)."""
+    if sidecar.fs_hz is not None:
+        return "the sidecar's fs_hz"
+    p = Path(source)
+    suffix = p.suffix.lower()
+    if suffix == ".wav":
+        return f"the WAV header of {p.name}"
+    if suffix in (".npz", ".mat"):
+        return f"{p.name}'s own rate (its scalar {'/'.join(FS_KEYS[:3])}, read as Hz, or its time vector)"
+    if suffix:
+        column = f" {sidecar.time_column}" if sidecar.time_column else ""
+        return f"{p.name}'s own rate (its time column{column}, or its layout's)"
+    return "the rate given with the records"
+
+
 def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "arrays",
                             hints: dict | None = None, read_as: str = "acceleration") -> Measurement:
     """Validate channels (name -> 1-D array) against a sidecar; the one place all checks live. ``read_as``: the
@@ -322,6 +340,8 @@ def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "
     fs = sidecar.fs_hz if sidecar.fs_hz is not None else hints.get("fs_hz")
     require(fs is not None, "fs_hz", None, "a sampling rate: give fs_hz in the sidecar (or a time column)")
     require_positive("fs_hz", float(fs))
+    require(float(fs) >= MIN_FS_HZ, "fs_hz", f"{float(fs):.4g} Hz from {fs_source(sidecar, source)}",
+            f"a vibration record's rate (>= {MIN_FS_HZ:g} Hz; a rate in kHz? write it in Hz)")
     speed = sidecar.speed_rpm if sidecar.speed_rpm is not None else hints.get("speed_rpm")
     require(speed is not None, "speed_rpm", None, "the nominal pinion speed in the sidecar")
     require_positive("speed_rpm", float(speed))
@@ -392,7 +412,8 @@ def _time_from_channels(rec, names: tuple, time_column: str | None, where: str, 
     if rec.fs_hz is not None or col is None:
         return replace(rec, names=tuple(names))
     i = names.index(col)
-    fs = column_fs(rec.data[:, i], f"{where}: column {col}", unit_s=seconds_per_unit(col) or 1.0, fs_hz=fs_hz)
+    fs = column_fs(rec.data[:, i], f"{where}: column {col}", unit_s=seconds_per_unit(col, named=col == time_column),
+                   fs_hz=fs_hz)
     return replace(rec, names=tuple(names[:i] + names[i + 1:]), data=np.delete(rec.data, i, axis=1), fs_hz=fs)
 
 

@@ -153,7 +153,8 @@ def _comb_maxima(x: np.ndarray, fs_hz: float, fm0: float, fraction: float, n_har
     a = np.asarray(x, float) - np.mean(x)
     n = a.size
     harm = [m for m in range(1, n_harmonics + 1) if m * fm0 * (1 + fraction) < 0.45 * fs_hz]
-    require(harm, "speed_rpm", 60.0 * fm0, f"a mesh frequency below 0.45 fs ({0.45 * fs_hz:g} Hz)")
+    require(harm, "speed_rpm", f"a mesh frequency of {fm0:.4g} Hz (+/- {100 * fraction:g} %)",
+            below_nyquist(fm0 * (1 + fraction), fs_hz))
     pad = 4
     spec = np.abs(np.fft.rfft(a * np.hanning(n), n=pad * n)) ** 2
     df = fs_hz / (pad * n)
@@ -167,6 +168,27 @@ def _comb_maxima(x: np.ndarray, fs_hz: float, fm0: float, fraction: float, n_har
     peaks = np.flatnonzero((score[1:-1] >= score[:-2]) & (score[1:-1] > score[2:])) + 1
     peaks = peaks[np.argsort(score[peaks])[::-1][:n_maxima]]
     return a, harm, [float(cand[i]) for i in peaks] or [float(cand[best])]
+
+
+def below_nyquist(fm_hz: float, fs_hz: float, fs_from: str | None = None) -> str:
+    """What a mesh frequency ``fm_hz`` must be, in a message refusing one at or above 0.45 fs: below it, and either
+    fs (``fs_from``: where it came from, :func:`compare.measurement.fs_source`) or the speed is wrong."""
+    source = f" from {fs_from}" if fs_from else ""
+    return (f"a mesh frequency (here {fm_hz:.4g} Hz) below 0.45 fs ({0.45 * fs_hz:.4g} Hz): fs {fs_hz:.6g} Hz{source} "
+            "is wrong if the record is a gear's (a time column in ms read as seconds? a rate written in kHz? "
+            "correct it there, or give fs_hz in the sidecar), else check speed_rpm and the pair's teeth")
+
+
+def check_mesh_below_nyquist(measurement, fraction: float = SEARCH_FRACTION) -> None:
+    """Refuse a measurement whose mesh frequency, searched within ``fraction`` of the sidecar's speed, reaches
+    0.45 fs: the message names fs and where it came from (:func:`below_nyquist`), not only speed_rpm."""
+    from compare.measurement import fs_source
+
+    z1 = measurement.pair.pinion.teeth
+    fm = z1 * float(measurement.speed_rpm) / 60.0 * (1.0 + fraction)
+    require(fm < 0.45 * measurement.fs_hz, "fs_hz / speed_rpm",
+            f"fs {measurement.fs_hz:.6g} Hz, speed_rpm {float(measurement.speed_rpm):g} ({z1} teeth)",
+            below_nyquist(fm, measurement.fs_hz, fs_source(measurement.sidecar, measurement.source)))
 
 
 def _refined(a: np.ndarray, fs_hz: float, harm: list[int], f0: float) -> float:
@@ -332,6 +354,7 @@ def refine_speed(measurement, *, search_fraction: float | None = None) -> SpeedE
         return speed_from_tacho(measurement.tacho_signal, measurement.fs_hz, z_pinion=z1, z_wheel=z2,
                                 pulses_per_rev=sc.tacho_pulses_per_rev, shaft=sc.tacho_shaft,
                                 nominal_rpm=measurement.speed_rpm)
+    check_mesh_below_nyquist(measurement, SEARCH_FRACTION if search_fraction is None else search_fraction)
     kw = dict(z_pinion=z1, nominal_rpm=measurement.speed_rpm)
     if search_fraction is None:
         est = spectrum_speed(measurement.signal, measurement.fs_hz, z_wheel=z2, **kw)

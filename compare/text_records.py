@@ -9,8 +9,10 @@ What a logger or a spreadsheet export puts around the numbers, and how it is rea
 - the delimiter ``,`` ``;`` tab or whitespace, sniffed from the first data line;
 - a decimal comma (German or French locale exports: ``0,125;-3,5``): read as a decimal point when the
   delimiter is not the comma itself;
-- a time column: named ``time``, ``time_s``, ``t`` (or the sidecar's ``time_column``), with its unit in the
-  name where it is not seconds (``time_ms``, ``Time [ms]``, ``t (us)``), converted to seconds here: fs = 1 / the
+- a time column: named ``time``, ``time_s``, ``t`` (or the sidecar's ``time_column``, whatever its name), with its
+  unit in the name where it is not seconds (``time_ms``, ``Time [ms]``, ``t (us)``; for the sidecar's column any
+  name's suffix: ``Zeit_ms``, ``Zeit [ms]``), converted to seconds here (a rate below :data:`MIN_FS_HZ` is refused
+  naming the column and the unit it was read in: a column of ms read as seconds): fs = 1 / the
   least-squares step over all samples (:func:`times_to_fs`), refused unless every step lies within the column's
   written resolution of it (a repeated or jittering time) - unless the sidecar gives ``fs_hz``, which is then the
   rate and the column is only dropped. A gap (a step longer than :data:`GAP_STEPS` sample periods beyond the
@@ -33,9 +35,18 @@ from gearpit.errors import InputError, require
 
 #: column names read as the time axis in seconds (lower-cased)
 TIME_COLUMNS = ("time", "time_s", "t", "times", "time_sec")
+_UNITS = r"(s|sec|ms|msec|us|usec|µs|μs|ns)"
 #: a time column's unit, from its name: ``time_ms``, ``Time [ms]``, ``t (us)``, ``time/s``
-_TIME_UNIT = re.compile(r"^(?:time|t)\s*(?:[_/]\s*|\[\s*|\(\s*)(s|sec|ms|us|µs|ns)\s*[\])]?$", re.IGNORECASE)
-_SECONDS = {"s": 1.0, "sec": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "ns": 1e-9}
+_TIME_UNIT = re.compile(r"^(?:time|t)\s*(?:[_/]\s*|\[\s*|\(\s*)" + _UNITS + r"\s*[\])]?$", re.IGNORECASE)
+#: ... and from any name the sidecar gives as ``time_column``: ``Zeit_ms``, ``Zeit [ms]``, ``Temps (s)``
+_ANY_TIME_UNIT = re.compile(r"(?:[_/\s]\s*|\[\s*|\(\s*)" + _UNITS + r"\s*[\])]?$", re.IGNORECASE)
+_SECONDS = {"s": 1.0, "sec": 1.0, "ms": 1e-3, "msec": 1e-3, "us": 1e-6, "usec": 1e-6, "µs": 1e-6, "μs": 1e-6,
+            "ns": 1e-9}
+#: a rate below this (Hz) is no vibration record's: what a time column in ms read as seconds, or a rate given in
+#: kHz, gives for every rate from 1 to 100 kHz; data acquisition for vibration samples at 1 kHz and more, and
+#: a 100 Hz record would hold the mesh of a 20-tooth pinion only below 135 rpm (first harmonic under 0.45 fs)
+MIN_FS_HZ = 100.0
+_UNIT_WORDS = {1.0: "seconds", 1e-3: "ms", 1e-6: "us", 1e-9: "ns"}
 _COMMENT = ("#", "%", "//")
 #: a step of the time column longer than this many sample periods (beyond its written resolution) is a gap:
 #: at least one sample is missing there (half a period more than one: a jitter, however large, stays below it)
@@ -48,13 +59,18 @@ class TimeGapError(InputError):
     ``fs_hz`` (:func:`column_fs`)."""
 
 
-def seconds_per_unit(name: str) -> float | None:
-    """Seconds per unit of a column named ``name`` if it is a time column (module docstring), else None."""
+def seconds_per_unit(name: str, *, named: bool = False) -> float | None:
+    """Seconds per unit of a column named ``name`` if it is a time column (module docstring), else None.
+    ``named``: the sidecar gives ``name`` as its ``time_column``, so it is one whatever it is called; its unit is
+    then read from the end of any name (``Zeit_ms``, ``Zeit [ms]``, ``Temps (us)``), seconds where none is
+    written (and :func:`column_fs` refuses a rate that reading makes implausible)."""
     n = name.strip().lower()
     if n in TIME_COLUMNS:
         return 1.0
-    m = _TIME_UNIT.match(n)
-    return _SECONDS[m.group(1).lower()] if m else None
+    m = (_ANY_TIME_UNIT.search if named else _TIME_UNIT.match)(n)
+    if m:
+        return _SECONDS[m.group(1).lower()]
+    return 1.0 if named else None
 
 
 def written_resolution(t: np.ndarray) -> float:
@@ -184,7 +200,7 @@ def read_table(path: Path, *, time_column: str | None = None, skip_text_lines: b
         names = tuple(f"ch{i}" for i in range(data.shape[1]))
     if time_column is not None:
         require(time_column in names, "time_column", time_column, "a column name: " + ", ".join(names))
-        tcol, scale = names.index(time_column), seconds_per_unit(time_column) or 1.0
+        tcol, scale = names.index(time_column), seconds_per_unit(time_column, named=True)
     else:
         tcol = next((i for i, n in enumerate(names) if seconds_per_unit(n) is not None), None)
         scale = seconds_per_unit(names[tcol]) if tcol is not None else None
@@ -198,15 +214,27 @@ def read_table(path: Path, *, time_column: str | None = None, skip_text_lines: b
 
 def column_fs(t: np.ndarray, where: str, *, unit_s: float = 1.0, fs_hz: float | None = None) -> float | None:
     """:func:`times_to_fs` of a time column; where it is refused for a jitter and the sidecar gives ``fs_hz``, None
-    (the sidecar's rate is used); a gap is refused in every case (:class:`TimeGapError`)."""
+    (the sidecar's rate is used); a gap is refused in every case (:class:`TimeGapError`). A rate below
+    :data:`MIN_FS_HZ` is refused naming the column and the unit it was read in (a column of ms read as seconds
+    gives 12.8 Hz for 12.8 kHz, and the error came later, about speed_rpm), unless the sidecar gives ``fs_hz``:
+    its rate is then used and the column only dropped."""
     try:
-        return times_to_fs(t, where, unit_s=unit_s)
+        fs = times_to_fs(t, where, unit_s=unit_s)
     except TimeGapError:
         raise
     except InputError:
         if fs_hz is None:
             raise
         return None
+    if fs < MIN_FS_HZ:
+        if fs_hz is not None:
+            return None
+        unit = _UNIT_WORDS.get(unit_s, f"units of {unit_s:g} s")
+        hint = ("if it holds ms, name it time_ms (or 'Time [ms]'; us: time_us)" if unit_s == 1.0 else
+                "if its unit is another, name it so (time_s, time_ms, time_us)")
+        raise InputError(where, f"fs {fs:.4g} Hz from this time column read as {unit}",
+                         f"a vibration record's rate (>= {MIN_FS_HZ:g} Hz): {hint}, or give fs_hz in the sidecar")
+    return fs
 
 
 def parse_number(cell: str) -> float | None:
@@ -269,4 +297,4 @@ def _parse_rows(lines: list[str], delim: str | None, where: str, first_line_no: 
     return np.asarray(rows, dtype=float)
 
 
-__all__ = ["GAP_STEPS", "TIME_COLUMNS", "TimeGapError", "column_fs", "parse_number", "read_table", "seconds_per_unit", "times_to_fs", "written_resolution"]
+__all__ = ["GAP_STEPS", "MIN_FS_HZ", "TIME_COLUMNS", "TimeGapError", "column_fs", "parse_number", "read_table", "seconds_per_unit", "times_to_fs", "written_resolution"]

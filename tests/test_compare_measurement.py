@@ -164,3 +164,19 @@ def test_real_spectraquest_file_loads(tmp_path):
                                                "torque_nm": 1.0, "sensor": "a1"}))
     assert set(m.channels) == {"a1", "a2", "a3", "a4"} and m.n_samples == 88832
     assert float(np.std(m.signal)) == pytest.approx(5.946, abs=1e-3)
+
+
+def test_a_mesh_frequency_above_nyquist_names_fs_and_where_it_came_from(tmp_path):
+    """A record at 1 kHz whose sidecar puts the mesh at 29 x 1000 / 60 = 483 Hz (above 0.45 fs) was refused as
+    a wrong speed_rpm alone; the message now names fs and its source (here the NPZ's own rate) beside speed_rpm."""
+    from compare.speed import refine_speed
+
+    rng = np.random.default_rng(6)
+    p = tmp_path / "slow.npz"
+    np.savez(p, acc=rng.standard_normal(4000), fs=1000.0)
+    _sidecar(tmp_path, "slow.toml", sensor="acc", speed_rpm=1000.0)
+    m = load_measurement(p)
+    with pytest.raises(InputError, match="fs_hz / speed_rpm") as exc:
+        refine_speed(m)
+    msg = str(exc.value)
+    assert "fs 1000 Hz from slow.npz's own rate" in msg and "check speed_rpm" in msg

@@ -206,3 +206,56 @@ def test_a_gap_in_the_time_column_is_refused_naming_its_time_and_size_even_with_
         msg = str(exc.value)
         assert f"about {missing} missing sample" in msg and "step 2999 -> 3000" in msg
         assert "0.2342969" in msg or "(0.234296875 s)" in msg      # where it starts: 2999 / fs
+
+
+@pytest.mark.parametrize("name", ["Zeit_ms", "Zeit [ms]", "Temps (ms)", "clock/ms"])
+def test_the_sidecars_time_column_gets_its_unit_from_any_name(tmp_path, name):
+    """A unit was read only from names beginning with time/t: ``time_column = "Zeit_ms"`` was read as seconds,
+    fs 12.8 Hz for 12.8 kHz (the audit's time_ms_sc.csv). The column the sidecar names gets its unit from the end
+    of any name."""
+    fs = 12800.0
+    t = np.arange(3200) / fs * 1e3
+    a = np.round(np.sin(2 * np.pi * 333.0 * t / 1e3), 4)
+    p = tmp_path / "t.csv"
+    p.write_text(f'"{name}",acc\n' + "\n".join(f"{tv:.6f},{av:.4f}" for tv, av in zip(t, a)) + "\n")
+    rec = read_record(p, time_column=name)
+    assert rec.fs_hz == pytest.approx(fs, rel=1e-9) and rec.names == ("acc",)
+
+
+def test_a_time_column_of_ms_read_as_seconds_is_refused_naming_the_column_and_its_reading(tmp_path):
+    """A logger's ``Time`` column in ms (no unit in the name) gave fs 12.8 Hz, and the error came later about
+    speed_rpm ("a mesh frequency below 0.45 fs (5.76 Hz)"); a sample-index column gave 1 Hz. Now refused where the
+    rate is read, naming the column, the unit it was read in and the remedy (MIN_FS_HZ: 100 Hz); with fs_hz in the
+    sidecar the column is only dropped, as a jittering one is."""
+    from compare.measurement import Sidecar, load_measurement
+
+    fs = 12800.0
+    t = np.arange(6400) / fs
+    a = np.round(np.random.default_rng(4).standard_normal(6400), 4)
+    side = {"pair": "spur-gds", "speed_rpm": 1000.0, "torque_nm": 40.0, "sensor": "acc"}
+    for col, rate in ((1e3 * t, "12.8"), (np.arange(6400.0), "1")):
+        p = tmp_path / "logger.csv"
+        p.write_text("Time,acc\n" + "\n".join(f"{tv:.6f},{av:.4f}" for tv, av in zip(col, a)) + "\n")
+        with pytest.raises(InputError, match="column Time") as exc:
+            load_measurement(p, Sidecar.from_dict(side))
+        msg = str(exc.value)
+        assert f"fs {rate} Hz from this time column read as seconds" in msg
+        assert "name it time_ms" in msg and "fs_hz" in msg
+        m = load_measurement(p, Sidecar.from_dict({**side, "fs_hz": fs}))
+        assert m.fs_hz == fs and set(m.channels) == {"acc"}
+
+
+def test_a_rate_in_khz_is_refused_naming_where_fs_came_from(tmp_path):
+    """An NPZ/MAT ``fs`` stored in kHz (12.8) was taken as 12.8 Hz, and so was a sidecar's fs_hz = 12.8; the
+    message now names the rate's source."""
+    from compare.measurement import Sidecar, load_measurement
+
+    a = np.random.default_rng(5).standard_normal(6400)
+    side = {"pair": "spur-gds", "speed_rpm": 1000.0, "torque_nm": 40.0, "sensor": "acc"}
+    p = tmp_path / "rig.npz"
+    np.savez(p, acc=a, fs=12.8)
+    with pytest.raises(InputError, match=r"fs_hz: got .12\.8 Hz from rig\.npz's own rate \(its scalar"):
+        load_measurement(p, Sidecar.from_dict(side))
+    np.savez(p, acc=a)
+    with pytest.raises(InputError, match=r"12\.8 Hz from the sidecar's fs_hz"):
+        load_measurement(p, Sidecar.from_dict({**side, "fs_hz": 12.8}))
