@@ -85,13 +85,43 @@ def written_resolution(t: np.ndarray) -> float:
     return 0.0
 
 
+def written_resolutions(t: np.ndarray) -> np.ndarray:
+    """The step of the last digit each value of ``t`` is written to: the larger of the column's fixed-decimal
+    resolution (:func:`written_resolution`) and the relative one of E-notation, ``10**(e - s + 1)`` for the value's
+    exponent ``e`` and the fewest significant digits ``s`` (at most 17) that write every value exactly: a column
+    written ``%.6E`` holds 9.999219E-01 and 5.000000E-01 to 1e-07 and 7.812500E-05 to 1e-11 (here read to 1e-09,
+    the decimals the column's values need: a fixed-decimal reading never gives a value a resolution coarser than
+    the coarsest the column truly has, nor an E-notation reading one coarser than the value's own, so the larger
+    of the two is the value's, or at worst within the column's).
+
+    Examples
+    --------
+    >>> written_resolutions(np.array([7.8125e-05, 0.5, 0.9999219])).tolist()
+    [1e-09, 1e-07, 1e-07]
+    """
+    t = np.asarray(t, dtype=float).ravel()
+    res = np.full(t.size, written_resolution(t))
+    nz = t != 0
+    if not np.any(nz):
+        return res
+    exp = np.floor(np.log10(np.abs(t[nz])))
+    for digits in range(1, 18):
+        unit = 10.0 ** (exp - digits + 1)
+        q = t[nz] / unit
+        if bool(np.all(np.abs(q - np.round(q)) <= 16 * np.finfo(float).eps * np.abs(q))):     # the float's own error
+            res[nz] = np.maximum(res[nz], unit)
+            return res
+    return res
+
+
 def times_to_fs(t: np.ndarray, where: str, *, unit_s: float = 1.0) -> float:
     """The sampling rate (Hz) of the sample times ``t`` (in units of ``unit_s`` seconds).
 
     The rate is ``1 / T`` with ``T`` the least-squares step over all samples (not the median step: a column
     written to 7 decimals at 12.8 kHz has steps of 78 and 79 us, median 78). Refused unless finite, increasing and
     uniform to the column's written resolution: every step within the resolution of the last printed digit
-    (:func:`written_resolution`; two roundings of half a digit each) plus the float rounding of ``t``, of
+    (:func:`written_resolutions`, per sample: E-notation is written to a number of significant digits, fixed
+    notation to a number of decimals; two roundings of half a digit each) plus the float rounding of ``t``, of
     ``T``; a jitter beyond it is refused, with the advice to give ``fs_hz`` in the sidecar. A gap (a step over
     :data:`GAP_STEPS` periods, the period being the median step, or ``T`` where the median step is within the
     resolution, beyond the resolution) is refused as :class:`TimeGapError`, naming where it starts (in the
@@ -112,29 +142,30 @@ def times_to_fs(t: np.ndarray, where: str, *, unit_s: float = 1.0) -> float:
             "finite times")
     k = np.arange(t.size, dtype=float) - 0.5 * (t.size - 1)
     step = float(np.dot(k, t - t.mean()) / np.dot(k, k))          # least squares: t = t0 + step k
-    tol = written_resolution(t) + 8 * eps * float(np.max(np.abs(t)))
+    res_each = written_resolutions(t)
+    tol = 0.5 * (res_each[:-1] + res_each[1:]) + 8 * eps * float(np.max(np.abs(t)))     # per step
     dt = np.diff(t)
     _refuse_gaps(t, dt, step, tol, where, unit_s)
-    worst = int(np.argmax(np.abs(dt - step)))
-    if not (step > 0 and float(np.min(dt)) > 0 and abs(dt[worst] - step) <= tol + 1e-9 * step):
+    worst = int(np.argmax(np.abs(dt - step) - tol))
+    if not (step > 0 and float(np.min(dt)) > 0 and abs(dt[worst] - step) <= tol[worst] + 1e-9 * step):
         bad = int(np.argmin(dt)) if step <= 0 or float(np.min(dt)) <= 0 else worst
         raise InputError(where, f"non-uniform or decreasing times (step {bad} -> {bad + 1}: {dt[bad]:.9g} against "
                          f"the mean step {step:.9g})",
-                         f"uniform sampling: every step within the column's written resolution ({tol:.3g}) of the "
-                         "mean step; for a logger whose clock is not uniform give fs_hz in the sidecar")
+                         f"uniform sampling: every step within the column's written resolution ({tol[bad]:.3g}) of "
+                         "the mean step; for a logger whose clock is not uniform give fs_hz in the sidecar")
     fs = 1.0 / (step * unit_s)
-    res = written_resolution(t)
+    res = float(np.max(res_each))
     if res > 0:   # known to fs res / duration at worst: rounded to the power of ten below that, not to noise
         grid = 10.0 ** np.floor(np.log10(fs * res / (t[-1] - t[0])))
         fs = float(np.round(fs / grid) * grid)
     return fs
 
 
-def _refuse_gaps(t: np.ndarray, dt: np.ndarray, step: float, tol: float, where: str, unit_s: float) -> None:
+def _refuse_gaps(t: np.ndarray, dt: np.ndarray, step: float, tol: np.ndarray, where: str, unit_s: float) -> None:
     """Raise :class:`TimeGapError` at the first step of ``t`` longer than :data:`GAP_STEPS` sample periods plus
-    ``tol`` (:func:`times_to_fs`)."""
+    its tolerance ``tol`` (:func:`times_to_fs`)."""
     median = float(np.median(dt))
-    period = median if median > tol else step
+    period = median if median > float(np.max(tol)) else step
     if not period > 0:
         return
     gaps = np.flatnonzero(dt > GAP_STEPS * period + tol)
@@ -297,4 +328,5 @@ def _parse_rows(lines: list[str], delim: str | None, where: str, first_line_no: 
     return np.asarray(rows, dtype=float)
 
 
-__all__ = ["GAP_STEPS", "MIN_FS_HZ", "TIME_COLUMNS", "TimeGapError", "column_fs", "parse_number", "read_table", "seconds_per_unit", "times_to_fs", "written_resolution"]
+__all__ = ["GAP_STEPS", "MIN_FS_HZ", "TIME_COLUMNS", "TimeGapError", "column_fs", "parse_number", "read_table", "seconds_per_unit", "times_to_fs", "written_resolution",
+           "written_resolutions"]

@@ -259,3 +259,23 @@ def test_a_rate_in_khz_is_refused_naming_where_fs_came_from(tmp_path):
     np.savez(p, acc=a)
     with pytest.raises(InputError, match=r"12\.8 Hz from the sidecar's fs_hz"):
         load_measurement(p, Sidecar.from_dict({**side, "fs_hz": 12.8}))
+
+
+@pytest.mark.parametrize("fmt,sep,comma", [("{:.6E}", ",", False), ("{:.6E}", ";", True), ("{:.6e}", "\t", False)])
+def test_a_time_column_in_e_notation_is_read_to_its_significant_digits(tmp_path, fmt, sep, comma):
+    """``%.6E`` (7 significant digits; a decimal point or comma) holds 0.9999219 to 1e-7 and 7.8125e-5 to 1e-11:
+    the resolution was taken as the decimals that write every value (1e-9 here), and a 1 s column at 12.8 kHz was
+    refused as non-uniform (the audit's sci6.csv, semi_comma_sci.csv). Each value now gets its own last digit's
+    step; a 100-sample gap is still refused."""
+    fs = 12800.0
+    t = np.arange(12800) / fs
+    a = np.round(np.sin(2 * np.pi * 333.0 * t), 4)
+    p = tmp_path / "sci.csv"
+    p.write_text(f"time_s{sep}acc\n" + "\n".join(_rows((t, a), sep, fmt, comma)) + "\n")
+    rec = read_record(p)
+    assert rec.fs_hz == pytest.approx(fs, rel=1e-9)
+    np.testing.assert_allclose(rec.data[:, 0], a, atol=1e-9)
+    keep = np.r_[0:6000, 6100:12800]
+    p.write_text(f"time_s{sep}acc\n" + "\n".join(_rows((t[keep], a[keep]), sep, fmt, comma)) + "\n")
+    with pytest.raises(InputError, match="about 100 missing samples"):
+        read_record(p)
