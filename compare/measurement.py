@@ -377,7 +377,7 @@ def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "
     for key in (sensor,) + ((tacho,) if tacho else ()) + tuple(secondary):
         bad = np.nonzero(~np.isfinite(data[key]))[0]
         require(bad.size == 0, f"channel {key}", f"{bad.size} NaN/inf samples, first at index {bad[:1].tolist()}",
-                "finite samples only")
+                "finite samples only (an empty cell of a text file is read as NaN)")
     for key in (sensor,) + tuple(secondary):
         require(float(np.ptp(data[key])) > 0, f"channel {key}", "constant", "a varying signal")
     require(read_as in SENSOR_QUANTITIES, "read_as", read_as, "one of: " + ", ".join(SENSOR_QUANTITIES))

@@ -2,10 +2,15 @@
 
 What a logger or a spreadsheet export puts around the numbers, and how it is read:
 
-- a byte-order mark (Excel's "CSV UTF-8"): dropped;
+- a byte-order mark (Excel's "CSV UTF-8"): dropped; UTF-16 (Excel's "Unicode text", by its byte-order mark or
+  NUL bytes) read as such; a file that is not valid UTF-8 read as cp1252 (a Windows export's ``µ``, ``²``),
+  and its errors say so;
 - comment lines (``#``, ``%``, ``//``), before the header or among the rows (a logger's preamble: rig, date,
   channel units): skipped, and named in no error;
-- an optional header line (the first non-comment line that is not all numbers), cells optionally quoted;
+- an optional header line (the first non-comment line that is not all numbers), cells optionally quoted, as
+  the numbers may be (``"0.125"``, ``"0,125"``); an unnamed first header cell over a column counting 0, 1, 2 ...
+  (pandas' ``to_csv`` index) is no channel and dropped;
+- an empty cell: NaN (refused if it is in a channel that is read), the last cell of a row too;
 - the delimiter ``,`` ``;`` tab or whitespace, sniffed from the first data line;
 - a decimal comma (German or French locale exports: ``0,125;-3,5``): read as a decimal point when the
   delimiter is not the comma itself;
@@ -188,44 +193,56 @@ def read_table(path: Path, *, time_column: str | None = None, skip_text_lines: b
     """``(names, data, fs_hz)`` of a delimited text file (module docstring); ``skip_text_lines`` drops every
     leading line that is not a row of at least two numbers (layouts with free-text preambles); ``fs_hz``: the
     sidecar's rate, which a time column that is not uniform leaves in place of refusing the file."""
-    lines = path.read_text(encoding="utf-8-sig", errors="replace").splitlines()
+    text, encoding = _decoded(path)
+    where = str(path) if encoding == "UTF-8" else f"{path} (read as {encoding}: not UTF-8)"
+    lines = text.splitlines()
     lines = ["" if ln.lstrip().startswith(_COMMENT) else ln for ln in lines]     # keeps the line numbers
     start = 0
     while start < len(lines) and not lines[start].strip():
         start += 1
-    require(start < len(lines), str(path), "empty file", "a file with rows of numbers")
-    header = None
+    require(start < len(lines), where, "empty file", "a file with rows of numbers")
+    header, unnamed_first = None, False
     if skip_text_lines:
         while start < len(lines):
             cells = [c for c in _split(lines[start], _sniff_delimiter(lines[start])) if c]
             if cells and all(_is_number(c) for c in cells) and len(cells) >= 2:
                 break
             start += 1
-        require(start < len(lines), str(path), "no numeric rows", "rows of numbers after the header text")
+        require(start < len(lines), where, "no numeric rows", "rows of numbers after the header text")
     else:
         delim = _sniff_delimiter(lines[start])
-        first = _split(lines[start], delim)
+        first = _quoted_cells(lines[start], delim)
         if not all(_is_number(c) or c.lower() == "nan" or _DECIMAL_COMMA.match(c) for c in first if c):
-            header = [c.strip().strip('"') for c in next(csv.reader(io.StringIO(lines[start]),
-                                                                     delimiter=delim or " ", skipinitialspace=True))]
+            header = _quoted_cells(lines[start], delim)
+            unnamed_first = len(header) > 1 and header[0] == ""      # pandas' to_csv: its index column
             header = [h for h in header if h != ""]
             start += 1
             while start < len(lines) and not lines[start].strip():
                 start += 1
-    require(start < len(lines), str(path), "a header and no rows", "rows of numbers")
+    require(start < len(lines), where, "a header and no rows", "rows of numbers")
     delim = _sniff_delimiter(lines[start])
     body = lines[start:]
-    if delim != "," and any(_DECIMAL_COMMA.match(c) for c in _split(lines[start], delim)):
+    if '"' in body[0]:           # quoted cells ("0.125", or "0,125" beside a comma delimiter): unquoted
+        body = [";".join(c.replace(",", ".") if _DECIMAL_COMMA.match(c) else c for c in _quoted_cells(ln, delim))
+                if ln.strip() else ln for ln in body]
+        delim = ";"
+    elif delim != "," and any(_DECIMAL_COMMA.match(c) for c in _split(lines[start], delim)):
         body = [ln.replace(",", ".") for ln in body]
+    width = None if header is None else len(header) + unnamed_first
     try:  # numpy's C parser first (fast on 10^6 rows); ours for a precise message or ragged trailing separators
         data = np.loadtxt(io.StringIO("\n".join(body)), delimiter=delim, ndmin=2, dtype=float, comments=_COMMENT)
         if data.size == 0:
             raise ValueError("no rows")
     except ValueError:
-        data = _parse_rows(body, delim, str(path), start + 1)
+        data = _parse_rows(body, delim, where, start + 1, width)
     if header is not None:
-        require(len(header) == data.shape[1], f"{path}: header", len(header),
-                f"{data.shape[1]} names, one per data column")
+        counter = data.shape[0] > 1 and bool(np.all(data[:, 0] == np.arange(data.shape[0]) + data[0, 0]))
+        if unnamed_first and counter and data.shape[1] == len(header) + 1:      # pandas' index: no channel
+            data = data[:, 1:]
+        index_note = (" (its first column counts 0, 1, 2, ...: an index column without a name? name it or "
+                      "remove it)" if counter and data.shape[1] == len(header) + 1 else "")
+        require(len(header) == data.shape[1], f"{where}: header", len(header),
+                f"{data.shape[1]} names, one per data column{index_note}")
         names = tuple(header)
     else:
         names = tuple(f"ch{i}" for i in range(data.shape[1]))
@@ -237,7 +254,7 @@ def read_table(path: Path, *, time_column: str | None = None, skip_text_lines: b
         scale = seconds_per_unit(names[tcol]) if tcol is not None else None
     fs = None
     if tcol is not None:
-        fs = column_fs(data[:, tcol], f"{path}: column {names[tcol]}", unit_s=scale, fs_hz=fs_hz)
+        fs = column_fs(data[:, tcol], f"{where}: column {names[tcol]}", unit_s=scale, fs_hz=fs_hz)
         data = np.delete(data, tcol, axis=1)
         names = names[:tcol] + names[tcol + 1:]
     return names, data, fs
@@ -266,6 +283,35 @@ def column_fs(t: np.ndarray, where: str, *, unit_s: float = 1.0, fs_hz: float | 
         raise InputError(where, f"fs {fs:.4g} Hz from this time column read as {unit}",
                          f"a vibration record's rate (>= {MIN_FS_HZ:g} Hz): {hint}, or give fs_hz in the sidecar")
     return fs
+
+
+def _decoded(path: Path) -> tuple[str, str]:
+    """``(text, encoding)`` of a text file: UTF-8 (a byte-order mark dropped); UTF-16 by its byte-order mark or
+    its NUL bytes (Excel's "Unicode text"); else cp1252 (a Windows logger's or spreadsheet's ``µ``, ``²``, ``°``;
+    latin-1 for the five bytes cp1252 leaves undefined)."""
+    raw = path.read_bytes()
+    head = raw[:4096]
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")) or head.count(0) > len(head) // 4:
+        enc = ("utf-16" if raw.startswith((b"\xff\xfe", b"\xfe\xff")) else
+               "utf-16-le" if head[1::2].count(0) >= head[0::2].count(0) else "utf-16-be")
+        try:
+            return raw.decode(enc), "UTF-16"
+        except UnicodeDecodeError as exc:
+            raise InputError(str(path), f"NUL bytes, and no valid UTF-16 ({exc.reason})",
+                             "a text file in UTF-8, UTF-16 or cp1252") from None
+    try:
+        return raw.decode("utf-8-sig"), "UTF-8"
+    except UnicodeDecodeError:
+        pass
+    try:
+        return raw.decode("cp1252"), "cp1252"
+    except UnicodeDecodeError:
+        return raw.decode("latin-1"), "latin-1"
+
+
+def _quoted_cells(line: str, delim: str | None) -> list[str]:
+    """The cells of ``line``, quotes removed (a quoted cell may hold the delimiter: ``"0,5","1,2"``)."""
+    return [c.strip() for c in next(csv.reader(io.StringIO(line), delimiter=delim or " ", skipinitialspace=True))]
 
 
 def parse_number(cell: str) -> float | None:
@@ -299,6 +345,7 @@ def _sniff_delimiter(line: str) -> str | None:
     present = [d for d in (";", ",", "\t") if d in line]
     for d in present:
         cells = _split(line, d)
+        cells = [c.strip('"') for c in cells]
         if len(cells) > 1 and all(c == "" or _is_number(c) or _DECIMAL_COMMA.match(c) for c in cells):
             return d
     if not present or all(_is_number(c) or _DECIMAL_COMMA.match(c) for c in line.split()):
@@ -306,14 +353,17 @@ def _sniff_delimiter(line: str) -> str | None:
     return present[0]
 
 
-def _parse_rows(lines: list[str], delim: str | None, where: str, first_line_no: int) -> np.ndarray:
+def _parse_rows(lines: list[str], delim: str | None, where: str, first_line_no: int,
+                header_width: int | None = None) -> np.ndarray:
+    """The rows of numbers of ``lines``; an empty cell is NaN (the last one too, where the row would otherwise be
+    a cell short of ``header_width``, the header's count), a trailing separator is none."""
     rows = []
     width = None
     for i, line in enumerate(lines):
         if not line.strip():
             continue
         cells = _split(line, delim)
-        while cells and cells[-1] == "":  # trailing separator
+        while cells and cells[-1] == "" and (header_width is None or len(cells) > header_width):  # trailing sep.
             cells.pop()
         if width is None:
             width = len(cells)

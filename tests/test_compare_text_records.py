@@ -279,3 +279,70 @@ def test_a_time_column_in_e_notation_is_read_to_its_significant_digits(tmp_path,
     p.write_text(f"time_s{sep}acc\n" + "\n".join(_rows((t[keep], a[keep]), sep, fmt, comma)) + "\n")
     with pytest.raises(InputError, match="about 100 missing samples"):
         read_record(p)
+
+
+@pytest.mark.parametrize("sep,comma", [(",", False), (";", True), (",", True)])
+def test_quoted_numbers_are_read(tmp_path, sep, comma):
+    """Every cell quoted (``"0.125"``; French Excel: ``"0,125"`` beside a comma delimiter) was refused as "numbers
+    only"."""
+    t, a, b = _signal()
+    p = tmp_path / "q.csv"
+    rows = [sep.join(f'"{c}"' for c in r.split("|")) for r in _rows((t, a, b), "|", "{:.8f}", comma)]
+    p.write_text(sep.join(['"time_s"', '"acc"', '"tacho"']) + "\n" + "\n".join(rows) + "\n")
+    rec = read_record(p)
+    assert rec.names == ("acc", "tacho") and rec.fs_hz == pytest.approx(FS, rel=1e-9)
+    np.testing.assert_allclose(rec.data, np.column_stack([a, b]), atol=1e-12)
+
+
+def test_a_pandas_index_column_is_dropped_and_an_unnamed_counter_named_in_the_message(tmp_path):
+    """pandas' ``to_csv`` writes its index under an empty header cell: the header had one name fewer than the data
+    and was refused by count. It is now dropped; a counter column under a header that does not name it at all is
+    named in the message."""
+    import pandas as pd
+
+    t, a, b = _signal()
+    p = tmp_path / "pd.csv"
+    pd.DataFrame({"time_s": t, "acc": a, "tacho": b}).to_csv(p)
+    rec = read_record(p)
+    assert rec.names == ("acc", "tacho") and rec.fs_hz == pytest.approx(FS, rel=1e-9)
+    np.testing.assert_allclose(rec.data, np.column_stack([a, b]), atol=1e-12)
+    p.write_text("time_s,acc,tacho\n" + "\n".join(f"{i}," + r for i, r in enumerate(_rows((t, a, b), ","))) + "\n")
+    with pytest.raises(InputError, match="an index column without a name"):
+        read_record(p)
+
+
+@pytest.mark.parametrize("encoding,name", [("cp1252", "cp1252"), ("utf-16", "UTF-16"), ("utf-16-le", "UTF-16")])
+def test_a_windows_or_utf16_export_is_decoded_and_its_encoding_named(tmp_path, encoding, name):
+    """A cp1252 header (``Beschl. [m/s²]``) was decoded to U+FFFD and a sidecar naming the channel was refused
+    with a garbled list; Excel's "Unicode text" (UTF-16) gave "got '\\x00'". Both are read; errors name the
+    encoding used."""
+    t, a, b = _signal()
+    p = tmp_path / "win.txt"
+    body = "\r\n".join(_rows((t, a, b), "\t", "{:.8f}"))
+    p.write_bytes(("time_s\tBeschl. [m/s²]\ttemp [°C]\r\n" + body + "\r\n").encode(encoding))
+    rec = read_record(p)
+    assert rec.names == ("Beschl. [m/s²]", "temp [°C]") and rec.fs_hz == pytest.approx(FS, rel=1e-9)
+    np.testing.assert_allclose(rec.data, np.column_stack([a, b]), atol=1e-12)
+    p.write_bytes(("time_s\tBeschl. [m/s²]\ttemp [°C]\r\n" + body + "\r\nabc\t1\t2\r\n").encode(encoding))
+    with pytest.raises(InputError, match=f"read as {name}: not UTF-8"):
+        read_record(p)
+
+
+def test_an_empty_last_cell_is_an_empty_cell_not_a_short_row(tmp_path):
+    """``0.1,0.2,`` under a three-name header was refused as a row of 2 columns; it is an empty cell, read as NaN
+    like one in the middle (refused only in a channel that is read, and the message says so)."""
+    from compare.measurement import Sidecar, load_measurement
+
+    fs = 12800.0
+    t = np.arange(6400) / fs
+    rng = np.random.default_rng(7)
+    a, b = np.round(rng.standard_normal(6400), 4), np.round(rng.standard_normal(6400), 4)
+    rows = _rows((t, a, b), ",", "{:.8f}")
+    rows[500] = rows[500].rsplit(",", 1)[0] + ","
+    p = tmp_path / "e.csv"
+    p.write_text("time_s,acc,y\n" + "\n".join(rows) + "\n")
+    side = {"pair": "spur-gds", "speed_rpm": 1000.0, "torque_nm": 40.0}
+    m = load_measurement(p, Sidecar.from_dict({**side, "sensor": "acc"}))
+    np.testing.assert_array_equal(m.signal, a)
+    with pytest.raises(InputError, match=r"channel y: .*first at index \[500\].*empty cell"):
+        load_measurement(p, Sidecar.from_dict({**side, "sensor": "y"}))
