@@ -45,6 +45,7 @@ from __future__ import annotations
 
 import json
 import math
+from glob import escape as glob_escape
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -95,6 +96,7 @@ class Sidecar:
     def from_dict(cls, d: dict, where: str = "sidecar") -> "Sidecar":
         """Build from the parsed JSON/TOML; unknown keys and bad values raise :class:`InputError`."""
         require(isinstance(d, dict), where, type(d).__name__, "a table of sidecar keys")
+        d = {k: v for k, v in d.items() if v is not None}     # JSON null: absent, as the key left out
         check_keys(d, SIDECAR_KEYS, where, required={"pair"})
         pair = _pair(d["pair"], f"{where}.pair")
         kw: dict[str, Any] = {"pair": pair}
@@ -196,11 +198,12 @@ def _pair(value, where: str):
 
 
 def read_sidecar(path: str | Path) -> Sidecar:
-    """Read a JSON (``.json``) or TOML sidecar."""
+    """Read a JSON (``.json``) or TOML sidecar (UTF-8, a byte-order mark as Windows editors write it skipped; a
+    JSON ``null`` is a key left out)."""
     p = Path(path)
     if p.suffix.lower() == ".json":
         try:
-            d = json.loads(p.read_text(encoding="utf-8"))
+            d = json.loads(p.read_text(encoding="utf-8-sig"))
         except OSError as exc:
             raise InputError("sidecar", str(p), f"a readable JSON file ({exc.strerror})") from None
         except json.JSONDecodeError as exc:
@@ -221,7 +224,7 @@ def _is_simulate_metadata_file(path: Path) -> bool:
     if path.suffix.lower() != ".json":
         return False
     try:
-        return is_simulate_metadata(json.loads(path.read_text(encoding="utf-8")))
+        return is_simulate_metadata(json.loads(path.read_text(encoding="utf-8-sig")))
     except (OSError, ValueError):       # unreadable or not JSON: read_sidecar says why
         return False
 
@@ -236,6 +239,12 @@ def find_sidecar(measurement_path: str | Path) -> Path:
     sidecar is found (:class:`NoSidecarError`) says so; two sidecars (``rig.toml`` and ``rig.json``) are refused
     naming both (``--meta`` picks one)."""
     p = Path(measurement_path)
+    if p.suffix.lower() in (".toml", ".json"):          # a sidecar (or a model, a case) given as the measurement
+        beside = sorted(c.name for c in p.parent.glob(glob_escape(p.name.split(".")[0]) + ".*")
+                        if c.suffix.lower() not in (".toml", ".json", ".template", ".jsonl", ".lock") and c.is_file())
+        raise InputError("measurement", p.name, f"a measurement file (CSV/TXT, NPY, NPZ, WAV, MAT): {p.name} is a "
+                         f"sidecar (or another {p.suffix.lower()[1:].upper()} description), not a measurement; give "
+                         "the data file it describes" + (f" ({', '.join(beside)} beside it)" if beside else ""))
     candidates = [p.with_name(p.stem + s) for s in SIDECAR_SUFFIXES] + [p.with_name(p.name + s) for s in (".toml", ".json")]
     found, skipped = [], []
     for c in candidates:
