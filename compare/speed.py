@@ -109,9 +109,53 @@ def constant_track(n_samples: int, fs_hz: float, fr_hz: float) -> AngleTrack:
     return AngleTrack(np.array([0.0, duration]), np.array([0.0, TWO_PI * fr_hz * duration]))
 
 
+#: a tachometer channel with more than this share of its samples inside its Schmitt trigger's band (the middle
+#: :data:`features.tacho.TACHO_HYSTERESIS` of its range) is no pulse train: a pulse train sits at its low or its
+#: high level but on its edges (a TTL train with 2 % noise: 0 %; 10 % noise: ~8 %), a sine from an inductive
+#: pickup 26 %, a level with noise (a speed channel, a disconnected input) 80-95 %, a ramp 40 %
+PULSE_TRAIN_MAX_BETWEEN = 0.35
+#: a channel that is not a pulse train but a level this many times its spread, within these rpm, may be a speed
+#: channel (rpm)
+SPEED_CHANNEL_LEVEL = 10.0
+SPEED_CHANNEL_RPM = (10.0, 1e5)
+
+
+def check_pulse_train(tacho: np.ndarray, channel: str = "tacho") -> None:
+    """Refuse a tachometer channel that is no pulse train (:data:`PULSE_TRAIN_MAX_BETWEEN`), saying what it looks
+    like instead: a constant, a level (a speed channel in rpm, or in volts: the sidecar has no key for one, so the
+    advice is to leave ``tacho`` out), or noise (a disconnected input). Without this, the Schmitt trigger read
+    edges in noise and the error was a pulse rate against speed_rpm ("a pulse every 36.9 ms, i.e. 1625.9 rpm")."""
+    from features.tacho import TACHO_HYSTERESIS
+
+    x = np.asarray(tacho, dtype=float)
+    lo, hi = float(np.min(x)), float(np.max(x))
+    require(hi > lo, "tacho", f"channel {channel}: constant", "a pulse train (no pulses: is it connected?)")
+    half = 0.5 * TACHO_HYSTERESIS * (hi - lo)
+    mid = 0.5 * (lo + hi)
+    between = float(np.mean(np.abs(x - mid) < half))
+    if between <= PULSE_TRAIN_MAX_BETWEEN:
+        return
+    mean, spread = float(np.mean(x)), float(np.std(x))
+    if abs(mean) > SPEED_CHANNEL_LEVEL * spread:
+        rpm_lo, rpm_hi = SPEED_CHANNEL_RPM
+        kind = ("a speed channel in rpm?" if rpm_lo <= mean <= rpm_hi else
+                "a speed channel in volts or another unit?")
+        looks = (f"a level of {mean:.5g} with a spread of {100 * spread / abs(mean):.2g} %: {kind} The sidecar has "
+                 "no key for a speed channel: leave tacho out (the speed is then measured from the mesh harmonics"
+                 + (f") and give its mean as speed_rpm = {mean:.5g}" if rpm_lo <= mean <= rpm_hi else ")"))
+    else:
+        looks = (f"noise around {mean:.3g} (RMS {spread:.3g}): no pulses; is the tachometer connected, and is tacho "
+                 "the pulse channel?")
+    raise InputError("tacho", f"channel {channel}: {100 * between:.0f} % of its samples between its low and high levels",
+                     f"a pulse train (at most {100 * PULSE_TRAIN_MAX_BETWEEN:g} % between them: a pulse train sits "
+                     f"at one level or the other); it looks like {looks}")
+
+
 def speed_from_tacho(tacho: np.ndarray, fs_hz: float, *, z_pinion: int, z_wheel: int, pulses_per_rev: int = 1,
-                     shaft: str = "pinion", nominal_rpm: float) -> SpeedEstimate:
-    """Mean speed and smooth pinion angle track from tachometer pulses (module docstring)."""
+                     shaft: str = "pinion", nominal_rpm: float, channel: str = "tacho") -> SpeedEstimate:
+    """Mean speed and smooth pinion angle track from tachometer pulses (module docstring); a channel that is no
+    pulse train is refused saying what it looks like (:func:`check_pulse_train`; ``channel``: its name)."""
+    check_pulse_train(tacho, channel)
     per_rev = 1.0 if shaft == "pinion" else z_wheel / z_pinion  # pinion revs per tacho-shaft rev
     expected_s = 60.0 / nominal_rpm * per_rev / pulses_per_rev      # the pulse interval the sidecar implies
     times, index, step = tacho_pulse_index(tacho_pulse_times(tacho, fs_hz), expected_s)
@@ -353,7 +397,7 @@ def refine_speed(measurement, *, search_fraction: float | None = None) -> SpeedE
         sc = measurement.sidecar
         return speed_from_tacho(measurement.tacho_signal, measurement.fs_hz, z_pinion=z1, z_wheel=z2,
                                 pulses_per_rev=sc.tacho_pulses_per_rev, shaft=sc.tacho_shaft,
-                                nominal_rpm=measurement.speed_rpm)
+                                nominal_rpm=measurement.speed_rpm, channel=measurement.tacho)
     check_mesh_below_nyquist(measurement, SEARCH_FRACTION if search_fraction is None else search_fraction)
     kw = dict(z_pinion=z1, nominal_rpm=measurement.speed_rpm)
     if search_fraction is None:
