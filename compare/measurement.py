@@ -53,14 +53,16 @@ from __future__ import annotations
 
 import json
 import math
+from glob import escape as glob_escape
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from compare.formats import FORMATS, read_record
+from compare.formats import FORMATS, FS_KEYS, read_record
 from compare.sensor_units import check_sensor_unit, unit_factor
+from compare.text_records import MIN_FS_HZ
 from gearpit.errors import InputError, require, require_positive
 from gearpit.tomlio import check_keys, read_toml
 
@@ -108,6 +110,7 @@ class Sidecar:
     def from_dict(cls, d: dict, where: str = "sidecar") -> "Sidecar":
         """Build from the parsed JSON/TOML; unknown keys and bad values raise :class:`InputError`."""
         require(isinstance(d, dict), where, type(d).__name__, "a table of sidecar keys")
+        d = {k: v for k, v in d.items() if v is not None}     # JSON null: absent, as the key left out
         check_keys(d, SIDECAR_KEYS, where, required={"pair"})
         pair = _pair(d["pair"], f"{where}.pair")
         kw: dict[str, Any] = {"pair": pair}
@@ -220,11 +223,12 @@ def _pair(value, where: str):
 
 
 def read_sidecar(path: str | Path) -> Sidecar:
-    """Read a JSON (``.json``) or TOML sidecar."""
+    """Read a JSON (``.json``) or TOML sidecar (UTF-8, a byte-order mark as Windows editors write it skipped; a
+    JSON ``null`` is a key left out)."""
     p = Path(path)
     if p.suffix.lower() == ".json":
         try:
-            d = json.loads(p.read_text(encoding="utf-8"))
+            d = json.loads(p.read_text(encoding="utf-8-sig"))
         except OSError as exc:
             raise InputError("sidecar", str(p), f"a readable JSON file ({exc.strerror})") from None
         except json.JSONDecodeError as exc:
@@ -245,7 +249,7 @@ def _is_simulate_metadata_file(path: Path) -> bool:
     if path.suffix.lower() != ".json":
         return False
     try:
-        return is_simulate_metadata(json.loads(path.read_text(encoding="utf-8")))
+        return is_simulate_metadata(json.loads(path.read_text(encoding="utf-8-sig")))
     except (OSError, ValueError):       # unreadable or not JSON: read_sidecar says why
         return False
 
@@ -260,6 +264,12 @@ def find_sidecar(measurement_path: str | Path) -> Path:
     sidecar is found (:class:`NoSidecarError`) says so; two sidecars (``rig.toml`` and ``rig.json``) are refused
     naming both (``--meta`` picks one)."""
     p = Path(measurement_path)
+    if p.suffix.lower() in (".toml", ".json"):          # a sidecar (or a model, a case) given as the measurement
+        beside = sorted(c.name for c in p.parent.glob(glob_escape(p.name.split(".")[0]) + ".*")
+                        if c.suffix.lower() not in (".toml", ".json", ".template", ".jsonl", ".lock") and c.is_file())
+        raise InputError("measurement", p.name, f"a measurement file (CSV/TXT, NPY, NPZ, WAV, MAT): {p.name} is a "
+                         f"sidecar (or another {p.suffix.lower()[1:].upper()} description), not a measurement; give "
+                         "the data file it describes" + (f" ({', '.join(beside)} beside it)" if beside else ""))
     candidates = [p.with_name(p.stem + s) for s in SIDECAR_SUFFIXES] + [p.with_name(p.name + s) for s in (".toml", ".json")]
     found, skipped = [], []
     for c in candidates:
@@ -344,6 +354,23 @@ def _channel(ref, names: tuple, where: str, no_index: str = "", columns: tuple =
     return ref
 
 
+def fs_source(sidecar: Sidecar, source: str) -> str:
+    """Where the sampling rate of a measurement read from ``source`` with ``sidecar`` came from, for the messages
+    that question it (a rate below :data:`MIN_FS_HZ`, a mesh frequency above the Nyquist frequency)."""
+    if sidecar.fs_hz is not None:
+        return "the sidecar's fs_hz"
+    p = Path(source)
+    suffix = p.suffix.lower()
+    if suffix == ".wav":
+        return f"the WAV header of {p.name}"
+    if suffix in (".npz", ".mat"):
+        return f"{p.name}'s own rate (its scalar {'/'.join(FS_KEYS[:3])}, read as Hz, or its time vector)"
+    if suffix:
+        column = f" {sidecar.time_column}" if sidecar.time_column else ""
+        return f"{p.name}'s own rate (its time column{column}, or its layout's)"
+    return "the rate given with the records"
+
+
 def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "arrays",
                             hints: dict | None = None, read_as: str = "acceleration",
                             no_index: str = "", columns: tuple = ()) -> Measurement:
@@ -359,6 +386,8 @@ def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "
     fs = sidecar.fs_hz if sidecar.fs_hz is not None else hints.get("fs_hz")
     require(fs is not None, "fs_hz", None, "a sampling rate: give fs_hz in the sidecar (or a time column)")
     require_positive("fs_hz", float(fs))
+    require(float(fs) >= MIN_FS_HZ, "fs_hz", f"{float(fs):.4g} Hz from {fs_source(sidecar, source)}",
+            f"a vibration record's rate (>= {MIN_FS_HZ:g} Hz; a rate in kHz? write it in Hz)")
     speed = sidecar.speed_rpm if sidecar.speed_rpm is not None else hints.get("speed_rpm")
     require(speed is not None, "speed_rpm", None, "the nominal pinion speed in the sidecar")
     require_positive("speed_rpm", float(speed))
@@ -394,7 +423,7 @@ def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "
     for key in (sensor,) + ((tacho,) if tacho else ()) + tuple(secondary):
         bad = np.nonzero(~np.isfinite(data[key]))[0]
         require(bad.size == 0, f"channel {key}", f"{bad.size} NaN/inf samples, first at index {bad[:1].tolist()}",
-                "finite samples only")
+                "finite samples only (an empty cell of a text file is read as NaN)")
     for key in (sensor,) + tuple(secondary):
         require(float(np.ptp(data[key])) > 0, f"channel {key}", "constant", "a varying signal")
     data[sensor] = data[sensor] * sidecar.unit_factor()      # SI from here on (sidecar sensor_unit)
@@ -439,7 +468,8 @@ def _time_from_channels(rec, names: tuple, time_column: str | None, where: str, 
     if rec.fs_hz is not None or col is None:
         return replace(rec, names=tuple(names))
     i = names.index(col)
-    fs = column_fs(rec.data[:, i], f"{where}: column {col}", unit_s=seconds_per_unit(col) or 1.0, fs_hz=fs_hz)
+    fs = column_fs(rec.data[:, i], f"{where}: column {col}", unit_s=seconds_per_unit(col, named=col == time_column),
+                   fs_hz=fs_hz)
     return replace(rec, names=tuple(names[:i] + names[i + 1:]), data=np.delete(rec.data, i, axis=1), fs_hz=fs)
 
 

@@ -115,9 +115,53 @@ def constant_track(n_samples: int, fs_hz: float, fr_hz: float) -> AngleTrack:
     return AngleTrack(np.array([0.0, duration]), np.array([0.0, TWO_PI * fr_hz * duration]))
 
 
+#: a tachometer channel with more than this share of its samples inside its Schmitt trigger's band (the middle
+#: :data:`features.tacho.TACHO_HYSTERESIS` of its range) is no pulse train: a pulse train sits at its low or its
+#: high level but on its edges (a TTL train with 2 % noise: 0 %; 10 % noise: ~8 %), a sine from an inductive
+#: pickup 26 %, a level with noise (a speed channel, a disconnected input) 80-95 %, a ramp 40 %
+PULSE_TRAIN_MAX_BETWEEN = 0.35
+#: a channel that is not a pulse train but a level this many times its spread, within these rpm, may be a speed
+#: channel (rpm)
+SPEED_CHANNEL_LEVEL = 10.0
+SPEED_CHANNEL_RPM = (10.0, 1e5)
+
+
+def check_pulse_train(tacho: np.ndarray, channel: str = "tacho") -> None:
+    """Refuse a tachometer channel that is no pulse train (:data:`PULSE_TRAIN_MAX_BETWEEN`), saying what it looks
+    like instead: a constant, a level (a speed channel in rpm, or in volts: the sidecar has no key for one, so the
+    advice is to leave ``tacho`` out), or noise (a disconnected input). Without this, the Schmitt trigger read
+    edges in noise and the error was a pulse rate against speed_rpm ("a pulse every 36.9 ms, i.e. 1625.9 rpm")."""
+    from features.tacho import TACHO_HYSTERESIS
+
+    x = np.asarray(tacho, dtype=float)
+    lo, hi = float(np.min(x)), float(np.max(x))
+    require(hi > lo, "tacho", f"channel {channel}: constant", "a pulse train (no pulses: is it connected?)")
+    half = 0.5 * TACHO_HYSTERESIS * (hi - lo)
+    mid = 0.5 * (lo + hi)
+    between = float(np.mean(np.abs(x - mid) < half))
+    if between <= PULSE_TRAIN_MAX_BETWEEN:
+        return
+    mean, spread = float(np.mean(x)), float(np.std(x))
+    if abs(mean) > SPEED_CHANNEL_LEVEL * spread:
+        rpm_lo, rpm_hi = SPEED_CHANNEL_RPM
+        kind = ("a speed channel in rpm?" if rpm_lo <= mean <= rpm_hi else
+                "a speed channel in volts or another unit?")
+        looks = (f"a level of {mean:.5g} with a spread of {100 * spread / abs(mean):.2g} %: {kind} The sidecar has "
+                 "no key for a speed channel: leave tacho out (the speed is then measured from the mesh harmonics"
+                 + (f") and give its mean as speed_rpm = {mean:.5g}" if rpm_lo <= mean <= rpm_hi else ")"))
+    else:
+        looks = (f"noise around {mean:.3g} (RMS {spread:.3g}): no pulses; is the tachometer connected, and is tacho "
+                 "the pulse channel?")
+    raise InputError("tacho", f"channel {channel}: {100 * between:.0f} % of its samples between its low and high levels",
+                     f"a pulse train (at most {100 * PULSE_TRAIN_MAX_BETWEEN:g} % between them: a pulse train sits "
+                     f"at one level or the other); it looks like {looks}")
+
+
 def speed_from_tacho(tacho: np.ndarray, fs_hz: float, *, z_pinion: int, z_wheel: int, pulses_per_rev: int = 1,
-                     shaft: str = "pinion", nominal_rpm: float) -> SpeedEstimate:
-    """Mean speed and smooth pinion angle track from tachometer pulses (module docstring)."""
+                     shaft: str = "pinion", nominal_rpm: float, channel: str = "tacho") -> SpeedEstimate:
+    """Mean speed and smooth pinion angle track from tachometer pulses (module docstring); a channel that is no
+    pulse train is refused saying what it looks like (:func:`check_pulse_train`; ``channel``: its name)."""
+    check_pulse_train(tacho, channel)
     per_rev = 1.0 if shaft == "pinion" else z_wheel / z_pinion  # pinion revs per tacho-shaft rev
     expected_s = 60.0 / nominal_rpm * per_rev / pulses_per_rev      # the pulse interval the sidecar implies
     times, index, step = tacho_pulse_index(tacho_pulse_times(tacho, fs_hz), expected_s)
@@ -211,7 +255,8 @@ def _comb_maxima(x: np.ndarray, fs_hz: float, fm0: float, fraction: float, n_har
     a = np.asarray(x, float) - np.mean(x)
     n = a.size
     harm = [m for m in range(1, n_harmonics + 1) if m * fm0 * (1 + fraction) < 0.45 * fs_hz]
-    require(harm, "speed_rpm", 60.0 * fm0, f"a mesh frequency below 0.45 fs ({0.45 * fs_hz:g} Hz)")
+    require(harm, "speed_rpm", f"a mesh frequency of {fm0:.4g} Hz (+/- {100 * fraction:g} %)",
+            below_nyquist(fm0 * (1 + fraction), fs_hz))
     pad = 4
     spec = np.abs(np.fft.rfft(a * np.hanning(n), n=pad * n)) ** 2
     df = fs_hz / (pad * n)
@@ -225,6 +270,27 @@ def _comb_maxima(x: np.ndarray, fs_hz: float, fm0: float, fraction: float, n_har
     peaks = np.flatnonzero((score[1:-1] >= score[:-2]) & (score[1:-1] > score[2:])) + 1
     peaks = peaks[np.argsort(score[peaks])[::-1][:n_maxima]]
     return a, harm, [float(cand[i]) for i in peaks] or [float(cand[best])]
+
+
+def below_nyquist(fm_hz: float, fs_hz: float, fs_from: str | None = None) -> str:
+    """What a mesh frequency ``fm_hz`` must be, in a message refusing one at or above 0.45 fs: below it, and either
+    fs (``fs_from``: where it came from, :func:`compare.measurement.fs_source`) or the speed is wrong."""
+    source = f" from {fs_from}" if fs_from else ""
+    return (f"a mesh frequency (here {fm_hz:.4g} Hz) below 0.45 fs ({0.45 * fs_hz:.4g} Hz): fs {fs_hz:.6g} Hz{source} "
+            "is wrong if the record is a gear's (a time column in ms read as seconds? a rate written in kHz? "
+            "correct it there, or give fs_hz in the sidecar), else check speed_rpm and the pair's teeth")
+
+
+def check_mesh_below_nyquist(measurement, fraction: float = SEARCH_FRACTION) -> None:
+    """Refuse a measurement whose mesh frequency, searched within ``fraction`` of the sidecar's speed, reaches
+    0.45 fs: the message names fs and where it came from (:func:`below_nyquist`), not only speed_rpm."""
+    from compare.measurement import fs_source
+
+    z1 = measurement.pair.pinion.teeth
+    fm = z1 * float(measurement.speed_rpm) / 60.0 * (1.0 + fraction)
+    require(fm < 0.45 * measurement.fs_hz, "fs_hz / speed_rpm",
+            f"fs {measurement.fs_hz:.6g} Hz, speed_rpm {float(measurement.speed_rpm):g} ({z1} teeth)",
+            below_nyquist(fm, measurement.fs_hz, fs_source(measurement.sidecar, measurement.source)))
 
 
 def _refined(a: np.ndarray, fs_hz: float, harm: list[int], f0: float) -> float:
@@ -389,7 +455,8 @@ def refine_speed(measurement, *, search_fraction: float | None = None) -> SpeedE
         sc = measurement.sidecar
         return speed_from_tacho(measurement.tacho_signal, measurement.fs_hz, z_pinion=z1, z_wheel=z2,
                                 pulses_per_rev=sc.tacho_pulses_per_rev, shaft=sc.tacho_shaft,
-                                nominal_rpm=measurement.speed_rpm)
+                                nominal_rpm=measurement.speed_rpm, channel=measurement.tacho)
+    check_mesh_below_nyquist(measurement, SEARCH_FRACTION if search_fraction is None else search_fraction)
     kw = dict(z_pinion=z1, nominal_rpm=measurement.speed_rpm)
     if search_fraction is None:
         est = spectrum_speed(measurement.signal, measurement.fs_hz, z_wheel=z2, **kw)

@@ -12,7 +12,7 @@ def read_toml(path: str | Path) -> dict[str, Any]:
     """Read a TOML file; unreadable or malformed files raise :class:`InputError`."""
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        text = p.read_text(encoding="utf-8-sig")      # a byte-order mark (Windows Notepad) is no TOML error
     except OSError as exc:
         raise InputError("file", str(p), f"a readable TOML file ({exc.strerror})") from None
     try:

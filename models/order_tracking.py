@@ -56,7 +56,10 @@ def mesh_angle(x: np.ndarray, fs_hz: float, fr_hz: float, z_pinion: int, max_har
     fm = z_pinion * fr_hz
     if harmonic is None:
         harm = [m for m in range(1, max_harmonic + 1) if m * fm + fr_hz < 0.45 * fs_hz]
-        require(bool(harm), "speed_rpm", 60.0 * fr_hz, f"a mesh frequency below 0.45 fs ({0.45 * fs_hz:g} Hz)")
+        if not harm:
+            from compare.speed import below_nyquist
+
+            require(False, "speed_rpm", 60.0 * fr_hz, below_nyquist(fm + fr_hz, fs_hz))
         spec = np.abs(np.fft.rfft(a * np.hanning(n)))
         m = max(harm, key=lambda h: float(spec[int(round(h * fm * n / fs_hz))]))
     else:

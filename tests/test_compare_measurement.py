@@ -164,3 +164,52 @@ def test_real_spectraquest_file_loads(tmp_path):
                                                "torque_nm": 1.0, "sensor": "a1"}))
     assert set(m.channels) == {"a1", "a2", "a3", "a4"} and m.n_samples == 88832
     assert float(np.std(m.signal)) == pytest.approx(5.946, abs=1e-3)
+
+
+def test_a_mesh_frequency_above_nyquist_names_fs_and_where_it_came_from(tmp_path):
+    """A record at 1 kHz whose sidecar puts the mesh at 29 x 1000 / 60 = 483 Hz (above 0.45 fs) was refused as
+    a wrong speed_rpm alone; the message now names fs and its source (here the NPZ's own rate) beside speed_rpm."""
+    from compare.speed import refine_speed
+
+    rng = np.random.default_rng(6)
+    p = tmp_path / "slow.npz"
+    np.savez(p, acc=rng.standard_normal(4000), fs=1000.0)
+    _sidecar(tmp_path, "slow.toml", sensor="acc", speed_rpm=1000.0)
+    m = load_measurement(p)
+    with pytest.raises(InputError, match="fs_hz / speed_rpm") as exc:
+        refine_speed(m)
+    msg = str(exc.value)
+    assert "fs 1000 Hz from slow.npz's own rate" in msg and "check speed_rpm" in msg
+
+
+@pytest.mark.parametrize("name", ["m.json", "m.toml"])
+def test_a_sidecar_with_a_byte_order_mark_or_a_json_null_is_read(tmp_path, name):
+    """Windows Notepad writes a byte-order mark: a JSON or TOML sidecar with one was refused (a CSV with one was
+    read); a JSON ``"tacho": null`` was refused as not a channel. The mark is skipped, a null is a key left out."""
+    t, x = _signal()
+    p = tmp_path / "m.csv"
+    p.write_text("time_s,acc,b\n" + "\n".join(f"{a:.6f},{b:.6f},{c:.6f}" for a, (b, c) in zip(t, x)) + "\n")
+    if name.endswith(".json"):
+        text = json.dumps({"speed_rpm": 1500.0, "torque_nm": 20.0, "pair": "spur-gds", "sensor": "acc",
+                           "tacho": None, "fault": None})
+    else:
+        text = 'speed_rpm = 1500.0\ntorque_nm = 20.0\npair = "spur-gds"\nsensor = "acc"\n'
+    (tmp_path / name).write_bytes(("\ufeff" + text).encode("utf-8"))
+    m = load_measurement(p)
+    assert m.sensor == "acc" and m.tacho is None and m.fs_hz == pytest.approx(FS)
+    assert read_sidecar(tmp_path / name).tacho is None
+
+
+@pytest.mark.parametrize("name", ["m.toml", "m.json"])
+def test_a_sidecar_given_as_the_measurement_is_named_a_sidecar(tmp_path, name):
+    """``gearpit predict model r0.toml`` said "r0.toml: ... a sidecar beside it (r0.toml or r0.json)"; it now says
+    that the file is a sidecar, not a measurement, and names the data file beside it; no template is written."""
+    from compare.measurement import find_sidecar
+
+    t, x = _signal()
+    np.savez(tmp_path / "m.npz", acc=x[:, 0], fs_hz=FS)
+    side = _sidecar(tmp_path, name, sensor="acc")
+    for call in (find_sidecar, load_measurement):
+        with pytest.raises(InputError, match=f"{name} is a sidecar .*not a measurement.*m.npz beside it"):
+            call(side)
+    assert not list(tmp_path.glob("*.template"))

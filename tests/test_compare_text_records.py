@@ -165,22 +165,184 @@ def test_a_time_column_rounded_to_its_printed_decimals_gives_the_true_rate(tmp_p
     np.testing.assert_allclose(rec.data[:, 0], a)
 
 
-def test_a_gap_or_a_jitter_beyond_the_written_resolution_is_still_refused_and_fs_hz_suggested(tmp_path):
-    """Rounding to the printed digits is allowed, a missing sample or a 0.3 % jitter at 7 decimals is not; the
-    message says to give fs_hz in the sidecar, and a sidecar that gives it is then used in place of the column."""
+def test_a_jitter_beyond_the_written_resolution_is_refused_and_fs_hz_suggested(tmp_path):
+    """Rounding to the printed digits is allowed, a 0.3 % jitter at 7 decimals is not; the message says to give
+    fs_hz in the sidecar, and a sidecar that gives it is then used in place of the column."""
     from compare.measurement import Sidecar, load_measurement
 
     fs = 12800.0
     t = np.round(np.arange(6400) / fs, 7)
     rng = np.random.default_rng(1)
     a = np.round(rng.standard_normal(6400), 4)
-    for kind, tt, aa in (("gap", np.delete(t, 3000), np.delete(a, 3000)),
-                         ("jitter", t + np.round(rng.normal(0.0, 2.5e-7, t.size), 7), a)):
-        p = tmp_path / f"{kind}.csv"
-        p.write_text("time_s,acc\n" + "\n".join(f"{x:.7f},{y:.4f}" for x, y in zip(tt, aa)) + "\n")
-        with pytest.raises(InputError, match="non-uniform") as exc:
-            read_record(p)
-        assert "give fs_hz in the sidecar" in str(exc.value)
-        m = load_measurement(p, Sidecar.from_dict({"pair": "spur-gds", "speed_rpm": 1000.0, "torque_nm": 40.0,
-                                                   "fs_hz": fs, "sensor": "acc"}))
-        assert m.fs_hz == fs and m.channels.keys() == {"acc"}
+    tt = t + np.round(rng.normal(0.0, 2.5e-7, t.size), 7)
+    p = tmp_path / "jitter.csv"
+    p.write_text("time_s,acc\n" + "\n".join(f"{x:.7f},{y:.4f}" for x, y in zip(tt, a)) + "\n")
+    with pytest.raises(InputError, match="non-uniform") as exc:
+        read_record(p)
+    assert "give fs_hz in the sidecar" in str(exc.value)
+    m = load_measurement(p, Sidecar.from_dict({"pair": "spur-gds", "speed_rpm": 1000.0, "torque_nm": 40.0,
+                                               "fs_hz": fs, "sensor": "acc"}))
+    assert m.fs_hz == fs and m.channels.keys() == {"acc"}
+
+
+@pytest.mark.parametrize("missing,name,scale", [(1, "time_s", 1.0), (100, "time_s", 1.0), (100, "time_ms", 1e3)])
+def test_a_gap_in_the_time_column_is_refused_naming_its_time_and_size_even_with_fs_hz(tmp_path, missing, name,
+                                                                                       scale):
+    """Missing samples are a phase jump, not clock jitter: before, a sidecar giving fs_hz had the column dropped and
+    the two parts spliced without a word (the audit's gap_fs.csv, 100 samples missing). Now refused with or without
+    fs_hz, naming where the gap starts and how many samples are missing; a jitter with fs_hz stays accepted (above)."""
+    from compare.measurement import Sidecar, load_measurement
+
+    fs = 12800.0
+    keep = np.r_[0:3000, 3000 + missing:6400]
+    t = np.round(np.arange(6400) / fs * scale, 7)[keep]
+    a = np.round(np.random.default_rng(2).standard_normal(6400), 4)[keep]
+    p = tmp_path / "gap.csv"
+    p.write_text(f"{name},acc\n" + "\n".join(f"{x:.7f},{y:.4f}" for x, y in zip(t, a)) + "\n")
+    side = {"pair": "spur-gds", "speed_rpm": 1000.0, "torque_nm": 40.0, "sensor": "acc"}
+    for sidecar in (side, {**side, "fs_hz": fs}):
+        with pytest.raises(InputError, match="gap") as exc:
+            load_measurement(p, Sidecar.from_dict(sidecar))
+        msg = str(exc.value)
+        assert f"about {missing} missing sample" in msg and "step 2999 -> 3000" in msg
+        assert "0.2342969" in msg or "(0.234296875 s)" in msg      # where it starts: 2999 / fs
+
+
+@pytest.mark.parametrize("name", ["Zeit_ms", "Zeit [ms]", "Temps (ms)", "clock/ms"])
+def test_the_sidecars_time_column_gets_its_unit_from_any_name(tmp_path, name):
+    """A unit was read only from names beginning with time/t: ``time_column = "Zeit_ms"`` was read as seconds,
+    fs 12.8 Hz for 12.8 kHz (the audit's time_ms_sc.csv). The column the sidecar names gets its unit from the end
+    of any name."""
+    fs = 12800.0
+    t = np.arange(3200) / fs * 1e3
+    a = np.round(np.sin(2 * np.pi * 333.0 * t / 1e3), 4)
+    p = tmp_path / "t.csv"
+    p.write_text(f'"{name}",acc\n' + "\n".join(f"{tv:.6f},{av:.4f}" for tv, av in zip(t, a)) + "\n")
+    rec = read_record(p, time_column=name)
+    assert rec.fs_hz == pytest.approx(fs, rel=1e-9) and rec.names == ("acc",)
+
+
+def test_a_time_column_of_ms_read_as_seconds_is_refused_naming_the_column_and_its_reading(tmp_path):
+    """A logger's ``Time`` column in ms (no unit in the name) gave fs 12.8 Hz, and the error came later about
+    speed_rpm ("a mesh frequency below 0.45 fs (5.76 Hz)"); a sample-index column gave 1 Hz. Now refused where the
+    rate is read, naming the column, the unit it was read in and the remedy (MIN_FS_HZ: 100 Hz); with fs_hz in the
+    sidecar the column is only dropped, as a jittering one is."""
+    from compare.measurement import Sidecar, load_measurement
+
+    fs = 12800.0
+    t = np.arange(6400) / fs
+    a = np.round(np.random.default_rng(4).standard_normal(6400), 4)
+    side = {"pair": "spur-gds", "speed_rpm": 1000.0, "torque_nm": 40.0, "sensor": "acc"}
+    for col, rate in ((1e3 * t, "12.8"), (np.arange(6400.0), "1")):
+        p = tmp_path / "logger.csv"
+        p.write_text("Time,acc\n" + "\n".join(f"{tv:.6f},{av:.4f}" for tv, av in zip(col, a)) + "\n")
+        with pytest.raises(InputError, match="column Time") as exc:
+            load_measurement(p, Sidecar.from_dict(side))
+        msg = str(exc.value)
+        assert f"fs {rate} Hz from this time column read as seconds" in msg
+        assert "name it time_ms" in msg and "fs_hz" in msg
+        m = load_measurement(p, Sidecar.from_dict({**side, "fs_hz": fs}))
+        assert m.fs_hz == fs and set(m.channels) == {"acc"}
+
+
+def test_a_rate_in_khz_is_refused_naming_where_fs_came_from(tmp_path):
+    """An NPZ/MAT ``fs`` stored in kHz (12.8) was taken as 12.8 Hz, and so was a sidecar's fs_hz = 12.8; the
+    message now names the rate's source."""
+    from compare.measurement import Sidecar, load_measurement
+
+    a = np.random.default_rng(5).standard_normal(6400)
+    side = {"pair": "spur-gds", "speed_rpm": 1000.0, "torque_nm": 40.0, "sensor": "acc"}
+    p = tmp_path / "rig.npz"
+    np.savez(p, acc=a, fs=12.8)
+    with pytest.raises(InputError, match=r"fs_hz: got .12\.8 Hz from rig\.npz's own rate \(its scalar"):
+        load_measurement(p, Sidecar.from_dict(side))
+    np.savez(p, acc=a)
+    with pytest.raises(InputError, match=r"12\.8 Hz from the sidecar's fs_hz"):
+        load_measurement(p, Sidecar.from_dict({**side, "fs_hz": 12.8}))
+
+
+@pytest.mark.parametrize("fmt,sep,comma", [("{:.6E}", ",", False), ("{:.6E}", ";", True), ("{:.6e}", "\t", False)])
+def test_a_time_column_in_e_notation_is_read_to_its_significant_digits(tmp_path, fmt, sep, comma):
+    """``%.6E`` (7 significant digits; a decimal point or comma) holds 0.9999219 to 1e-7 and 7.8125e-5 to 1e-11:
+    the resolution was taken as the decimals that write every value (1e-9 here), and a 1 s column at 12.8 kHz was
+    refused as non-uniform (the audit's sci6.csv, semi_comma_sci.csv). Each value now gets its own last digit's
+    step; a 100-sample gap is still refused."""
+    fs = 12800.0
+    t = np.arange(12800) / fs
+    a = np.round(np.sin(2 * np.pi * 333.0 * t), 4)
+    p = tmp_path / "sci.csv"
+    p.write_text(f"time_s{sep}acc\n" + "\n".join(_rows((t, a), sep, fmt, comma)) + "\n")
+    rec = read_record(p)
+    assert rec.fs_hz == pytest.approx(fs, rel=1e-9)
+    np.testing.assert_allclose(rec.data[:, 0], a, atol=1e-9)
+    keep = np.r_[0:6000, 6100:12800]
+    p.write_text(f"time_s{sep}acc\n" + "\n".join(_rows((t[keep], a[keep]), sep, fmt, comma)) + "\n")
+    with pytest.raises(InputError, match="about 100 missing samples"):
+        read_record(p)
+
+
+@pytest.mark.parametrize("sep,comma", [(",", False), (";", True), (",", True)])
+def test_quoted_numbers_are_read(tmp_path, sep, comma):
+    """Every cell quoted (``"0.125"``; French Excel: ``"0,125"`` beside a comma delimiter) was refused as "numbers
+    only"."""
+    t, a, b = _signal()
+    p = tmp_path / "q.csv"
+    rows = [sep.join(f'"{c}"' for c in r.split("|")) for r in _rows((t, a, b), "|", "{:.8f}", comma)]
+    p.write_text(sep.join(['"time_s"', '"acc"', '"tacho"']) + "\n" + "\n".join(rows) + "\n")
+    rec = read_record(p)
+    assert rec.names == ("acc", "tacho") and rec.fs_hz == pytest.approx(FS, rel=1e-9)
+    np.testing.assert_allclose(rec.data, np.column_stack([a, b]), atol=1e-12)
+
+
+def test_a_pandas_index_column_is_dropped_and_an_unnamed_counter_named_in_the_message(tmp_path):
+    """pandas' ``to_csv`` writes its index under an empty header cell: the header had one name fewer than the data
+    and was refused by count. It is now dropped; a counter column under a header that does not name it at all is
+    named in the message."""
+    import pandas as pd
+
+    t, a, b = _signal()
+    p = tmp_path / "pd.csv"
+    pd.DataFrame({"time_s": t, "acc": a, "tacho": b}).to_csv(p)
+    rec = read_record(p)
+    assert rec.names == ("acc", "tacho") and rec.fs_hz == pytest.approx(FS, rel=1e-9)
+    np.testing.assert_allclose(rec.data, np.column_stack([a, b]), atol=1e-12)
+    p.write_text("time_s,acc,tacho\n" + "\n".join(f"{i}," + r for i, r in enumerate(_rows((t, a, b), ","))) + "\n")
+    with pytest.raises(InputError, match="an index column without a name"):
+        read_record(p)
+
+
+@pytest.mark.parametrize("encoding,name", [("cp1252", "cp1252"), ("utf-16", "UTF-16"), ("utf-16-le", "UTF-16")])
+def test_a_windows_or_utf16_export_is_decoded_and_its_encoding_named(tmp_path, encoding, name):
+    """A cp1252 header (``Beschl. [m/s²]``) was decoded to U+FFFD and a sidecar naming the channel was refused
+    with a garbled list; Excel's "Unicode text" (UTF-16) gave "got '\\x00'". Both are read; errors name the
+    encoding used."""
+    t, a, b = _signal()
+    p = tmp_path / "win.txt"
+    body = "\r\n".join(_rows((t, a, b), "\t", "{:.8f}"))
+    p.write_bytes(("time_s\tBeschl. [m/s²]\ttemp [°C]\r\n" + body + "\r\n").encode(encoding))
+    rec = read_record(p)
+    assert rec.names == ("Beschl. [m/s²]", "temp [°C]") and rec.fs_hz == pytest.approx(FS, rel=1e-9)
+    np.testing.assert_allclose(rec.data, np.column_stack([a, b]), atol=1e-12)
+    p.write_bytes(("time_s\tBeschl. [m/s²]\ttemp [°C]\r\n" + body + "\r\nabc\t1\t2\r\n").encode(encoding))
+    with pytest.raises(InputError, match=f"read as {name}: not UTF-8"):
+        read_record(p)
+
+
+def test_an_empty_last_cell_is_an_empty_cell_not_a_short_row(tmp_path):
+    """``0.1,0.2,`` under a three-name header was refused as a row of 2 columns; it is an empty cell, read as NaN
+    like one in the middle (refused only in a channel that is read, and the message says so)."""
+    from compare.measurement import Sidecar, load_measurement
+
+    fs = 12800.0
+    t = np.arange(6400) / fs
+    rng = np.random.default_rng(7)
+    a, b = np.round(rng.standard_normal(6400), 4), np.round(rng.standard_normal(6400), 4)
+    rows = _rows((t, a, b), ",", "{:.8f}")
+    rows[500] = rows[500].rsplit(",", 1)[0] + ","
+    p = tmp_path / "e.csv"
+    p.write_text("time_s,acc,y\n" + "\n".join(rows) + "\n")
+    side = {"pair": "spur-gds", "speed_rpm": 1000.0, "torque_nm": 40.0}
+    m = load_measurement(p, Sidecar.from_dict({**side, "sensor": "acc"}))
+    np.testing.assert_array_equal(m.signal, a)
+    with pytest.raises(InputError, match=r"channel y: .*first at index \[500\].*empty cell"):
+        load_measurement(p, Sidecar.from_dict({**side, "sensor": "y"}))

@@ -79,3 +79,38 @@ def test_a_tacho_unlike_the_sidecars_speed_is_refused_naming_the_keys():
     for ppr in (1, 2):
         est = speed_from_tacho(x2, FS, z_pinion=29, z_wheel=100, nominal_rpm=RPM, pulses_per_rev=ppr)
         assert est.speed_rpm == pytest.approx(RPM, rel=1e-4)
+
+
+@pytest.mark.parametrize("kind", ["rpm", "volts", "noise", "ramp"])
+def test_a_channel_that_is_no_pulse_train_is_refused_saying_what_it_looks_like(kind):
+    """An analogue speed channel (1000 rpm, or 1.0 V, with noise), a noise-only input or a run-up ramp given as the
+    tacho had the Schmitt trigger read edges in the noise and were refused as "a pulse every 36.9 ms, i.e. 1625.9
+    rpm ... check speed_rpm, tacho_pulses_per_rev..." (the audit's tacho_cases.py). Now: not a pulse train (the
+    share of samples between its levels), and for a level in a plausible rpm range the suggestion of a speed
+    channel, which the sidecar has no key for."""
+    rng = np.random.default_rng(8)
+    n = int(FS)
+    x = {"rpm": RPM + 2.0 * rng.standard_normal(n), "volts": RPM / 1000.0 + 0.002 * rng.standard_normal(n),
+         "noise": 0.05 * rng.standard_normal(n), "ramp": np.linspace(0.9, 1.1, n) * RPM + rng.standard_normal(n)}[kind]
+    with pytest.raises(InputError, match="between its low and high levels") as exc:
+        speed_from_tacho(x, FS, z_pinion=29, z_wheel=100, nominal_rpm=RPM)
+    msg = str(exc.value)
+    assert "channel tacho" in msg and "a pulse train" in msg and "pulse every" not in msg
+    if kind in ("rpm", "ramp"):
+        assert "a speed channel in rpm?" in msg and "no key for a speed channel" in msg
+    elif kind == "volts":
+        assert "a speed channel in volts" in msg
+    else:
+        assert "noise" in msg and "connected" in msg
+
+
+def test_a_pulse_train_with_noise_or_a_sine_pickup_stays_a_pulse_train():
+    """The check that refuses a speed channel leaves a TTL train with 10 % noise, an active-low one and an
+    inductive pickup's sine alone."""
+    t = np.arange(int(FS)) / FS
+    phase = (RPM / 60.0 * t) % 1.0
+    rng = np.random.default_rng(9)
+    for x in (np.where(phase < 0.2, 5.0, 0.0) + 0.5 * rng.standard_normal(t.size),
+              np.where(phase < 0.2, 0.0, 5.0), np.sin(2 * np.pi * RPM / 60.0 * t)):
+        assert speed_from_tacho(x, FS, z_pinion=29, z_wheel=100, nominal_rpm=RPM).speed_rpm == pytest.approx(RPM,
+                                                                                                            rel=2e-3)
