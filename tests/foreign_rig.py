@@ -125,6 +125,7 @@ def _pitch_deviations(r: ForeignRig) -> np.ndarray:
 
 def simulate_foreign(r: ForeignRig) -> dict:
     """Simulate the rig. Returns a dict: ``acc`` (sensor, m/s^2 x gain, with noise), ``tacho`` (V), ``fs_hz``,
+    ``pinion_angle_rad`` (the prescribed pinion angle at each sample),
     ``te_m`` (relative rotation along the line of action, rb1 theta1 - rb2 theta2), ``mesh_deflection_m`` (the
     contact's compression, less the eccentricities' error) and ``k_n_per_m`` (the pairs' summed stiffness)."""
     g = geometry(r)
@@ -268,7 +269,7 @@ def simulate_foreign(r: ForeignRig) -> dict:
         y = y + np.std(y) * 10 ** (-r.snr_db / 20) * rng.standard_normal(y.size)
     phi_out = phi1[0:2 * n:2 * over][: t_out.size][keep]
     tacho = np.where(np.mod(phi_out, 2 * math.pi) < 0.1 * 2 * math.pi, 5.0, 0.0)
-    return {"acc": y, "tacho": tacho, "fs_hz": fs, "te_m": te_out[keep],
+    return {"acc": y, "tacho": tacho, "fs_hz": fs, "te_m": te_out[keep], "pinion_angle_rad": phi_out,
             "mesh_deflection_m": defl[0:n:over][keep], "k_n_per_m": k_total[0:2 * n:2 * over][keep]}
 
 
