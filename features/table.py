@@ -224,13 +224,19 @@ def signal_features(x: np.ndarray, config: FeatureConfig, *, fr_pinion_hz: float
     require(top < fs / 2, "fr_pinion_hz", round(fr_p, 6),
             f"a speed keeping mesh harmonic {config.n_mesh_harmonics} and its sidebands below {fs / 2} Hz")
     track_w = tsa.AngleTrack(track_p.time_s, track_p.angle_rad * ratio)
-    require(track_w.revolutions >= 1 - 1e-9, "x", f"{a.size} samples",
-            f"a record holding >= 1 wheel revolution ({fs / fr_w:.0f} samples at this speed)")
+    # the averages skip the upsampling filter's edge effect at both ends (tsa.angular_resample's skip_edges)
+    edge_n = tsa.TimeInterpolant.UPSAMPLING_HALF_TAPS
+    span = track_w.time_s[-1] - track_w.time_s[0]
+    usable = (np.subtract(*tsa.usable_angle_span(track_w, edge_n / fs)[::-1]) / (2 * np.pi)
+              if span > 2 * edge_n / fs else 0.0)
+    require(usable >= 1 - 1e-9, "x", f"{a.size} samples",
+            f"a record holding >= 1 wheel revolution plus {edge_n} samples at each end "
+            f"({fs / fr_w + 2 * edge_n:.0f} samples at this speed)")
 
     out: dict[str, float] = {f"raw_{k}": float(v) for k, v in statistics.time_domain_statistics(a).items()}
 
     # the mean off first: the resampling's upsampling filter rings at the record's ends in proportion to its end
-    # values, and an offset (an accelerometer's bias) would put that ring into the averages' first samples
+    # values; the averages skip those ends (skip_edges, the default), the mean off keeps the ring small anyway
     a0 = a - a.mean()
     for shaft, track, fr, z in (("pinion", track_p, fr_p, config.z_pinion), ("wheel", track_w, fr_w, config.z_wheel)):
         avg = tsa.synchronous_average(a0, fs, track, samples_per_rev=tsa.default_samples_per_rev(fs, fr))
