@@ -244,7 +244,10 @@ def signal_features(x: np.ndarray, config: FeatureConfig, *, fr_pinion_hz: float
                                                   n_sideband_orders=config.tsa_sideband_orders)
         out.update({f"tsa_{shaft}_{k}": v for k, v in ci.items()})
 
-    lines = spectra.mesh_sideband_amplitudes(a, fs, fm_hz=fm, fr_pinion_hz=fr_p, fr_wheel_hz=fr_w,
+    # spectra and envelope of the mean-removed record too: through the window, a mean (an accelerometer's bias, a
+    # transmission error's static part) leaks into the shaft-order lines a few bins from DC, and it would be a
+    # carrier of the envelope
+    lines = spectra.mesh_sideband_amplitudes(a0, fs, fm_hz=fm, fr_pinion_hz=fr_p, fr_wheel_hz=fr_w,
                                              n_harmonics=config.n_mesh_harmonics, n_sidebands=config.n_sidebands,
                                              n_shaft_orders=config.n_shaft_orders, window=config.window)
     out.update({f"spec_{k}": v for k, v in lines.items()})
@@ -255,9 +258,9 @@ def signal_features(x: np.ndarray, config: FeatureConfig, *, fr_pinion_hz: float
         band = None
     elif band == "auto":
         min_hz = min(config.n_mesh_harmonics * fm, 0.25 * fs)  # above the mesh harmonics if room
-        found = env.find_resonance_band(a, fs, min_hz=min_hz)
+        found = env.find_resonance_band(a0, fs, min_hz=min_hz)
         band = found.band_hz
-    out.update(env.envelope_order_amplitudes(a, fs, fr_pinion_hz=fr_p, fr_wheel_hz=fr_w,
+    out.update(env.envelope_order_amplitudes(a0, fs, fr_pinion_hz=fr_p, fr_wheel_hz=fr_w,
                                              n_orders=config.n_shaft_orders, band_hz=band, window=config.window))
     if found is not None:
         out["env_band_centre"] = found.centre_hz
