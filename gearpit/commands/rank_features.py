@@ -177,7 +177,10 @@ def run(args) -> int:
     parts = []
     for key, rows in groups.items():
         rows = np.sort(rows)
-        part = extract_features(signals[rows], configs[key], fr_pinion_hz=fr[rows], n_jobs=args.jobs)
+        names = ([f"sample {v}" for v in index["sample_index"].to_numpy()[rows]] if "sample_index" in index.columns
+                 else [f"index row {r}" for r in rows])
+        part = extract_features(signals[rows], configs[key], fr_pinion_hz=fr[rows], n_jobs=args.jobs,
+                                record_names=names)
         part.index = rows
         parts.append(part)
     table = pd.concat(parts).sort_index()
