@@ -92,7 +92,9 @@ def decompose(x: np.ndarray, *, method: Method = "emd", trials: int = 100, noise
     Returns
     -------
     Decomposition
-        An ensemble's last row is moved into the residue when it has fewer than
+        No IMF at all (``imfs`` of shape ``(0, n)``, the record its own residue) for a constant record, or one
+        EMD finds no oscillation in (fewer than three extrema). An ensemble's last row is moved into the residue
+        when it has fewer than
         three extrema (a trend, not an oscillation). The EEMD residue also holds
         the ensemble mean of the added noise (std about
         ``noise_std_ratio * std(x) / sqrt(trials)``). EMD uses PyEMD's default
@@ -107,6 +109,8 @@ def decompose(x: np.ndarray, *, method: Method = "emd", trials: int = 100, noise
     require(isinstance(seed, (int, np.integer)) and 0 <= seed < 2**32, "seed", seed, "an integer in [0, 2**32)")
     require(isinstance(max_imf, (int, np.integer)) and (max_imf == -1 or max_imf >= 1), "max_imf", max_imf,
             "-1 or an integer >= 1")
+    if np.ptp(a) == 0:      # nothing to decompose (and CEEMDAN would divide by the record's zero std)
+        return Decomposition(imfs=np.zeros((0, a.size)), residue=a.copy())
     if method == "emd":
         emd = EMD()
         emd.emd(a, max_imf=max_imf)
@@ -121,7 +125,8 @@ def decompose(x: np.ndarray, *, method: Method = "emd", trials: int = 100, noise
         ceemdan = CEEMDAN(trials=int(trials), epsilon=noise_std_ratio, parallel=False)
         ceemdan.noise_seed(int(seed))
         imfs = ceemdan.ceemdan(a, max_imf=max_imf)
-    imfs = np.atleast_2d(np.asarray(imfs, dtype=float))
+    imfs = np.asarray(imfs, dtype=float)
+    imfs = np.atleast_2d(imfs) if imfs.size else np.zeros((0, a.size))
     if method != "emd" and imfs.shape[0] > 1 and _n_extrema(imfs[-1]) < 3:
         imfs = imfs[:-1]
     return Decomposition(imfs=imfs, residue=a - imfs.sum(axis=0))
@@ -208,8 +213,14 @@ def select_imf(imfs: np.ndarray, fs_hz: float, *, criterion: Criterion = "mesh_b
       kurtosis (most impulsive).
     - ``"fixed"``: IMF number ``imf_number`` (1-based as in the paper, IMF6 ->
       6); the last IMF if there are fewer.
+
+    A decomposition without IMFs (:func:`decompose` of a constant record) has nothing to pick: an
+    :class:`~gearpit.errors.InputError`.
     """
-    m = np.atleast_2d(np.asarray(imfs, dtype=float))
+    m = np.asarray(imfs, dtype=float)
+    require(m.ndim in (1, 2) and m.size > 0, "imfs", m.shape,
+            "at least one IMF (a decomposition of a record with >= 3 extrema)")
+    m = np.atleast_2d(m)
     require(criterion in CRITERIA, "criterion", criterion, "one of: " + ", ".join(CRITERIA))
     require_positive("fs_hz", fs_hz)
     if criterion == "fixed":

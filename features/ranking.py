@@ -29,6 +29,13 @@ Criteria, each computed per feature on the rows where it is finite:
   records would mostly measure the within-class scatter. Taking each drawn value
   as its own level would do exactly that: ``N_col`` would be the within-class
   spread, the same for every nuisance.
+- Severity classes: the ``severity_class`` column; without one they are made from the
+  continuous severity (:func:`severity_classes`): its distinct values when they are
+  few (a grid, at most ``MAX_LEVELS`` values each used twice on average), else the
+  healthy records (severity 0) and equal-frequency bins [4]_ of the damaged ones
+  (terciles, or halves when there are fewer than ``3 * MIN_PER_BIN``). Each record
+  as its own class (the former fallback) leaves the ANOVA one record per class and
+  the mutual-information estimator no neighbours within a class.
 - ``score``: mean over the criteria of the feature's percentile rank (1 best);
   ``rank`` orders by it.
 
@@ -140,6 +147,72 @@ def nuisance_groups(nuisance: np.ndarray, cls: np.ndarray) -> tuple[np.ndarray, 
     return out, True
 
 
+_MADE = "severity classes made from the severity (no class column):"
+
+
+def severity_classes(severity: np.ndarray) -> tuple[np.ndarray, str]:
+    """Severity classes made from a continuous severity, for a table without class labels (module docstring).
+
+    Parameters
+    ----------
+    severity : array (n,)
+        Severity per record (0 = healthy); NaN for unknown.
+
+    Returns
+    -------
+    classes : array of int (n,)
+        Class index per record (-1 where the severity is unknown).
+    description : str
+        How the classes were made, with their severity ranges and sizes (for the ranking's note).
+
+    Raises
+    ------
+    InputError
+        When fewer than two classes can be made (too few damaged records for two bins and no healthy ones, or
+        a single severity).
+
+    Examples
+    --------
+    >>> sev = np.r_[np.zeros(6), np.linspace(0.05, 0.3, 15)]
+    >>> cls, how = severity_classes(sev)
+    >>> np.bincount(cls).tolist()
+    [6, 5, 5, 5]
+    """
+    x = np.asarray(severity, dtype=float)
+    out = np.full(x.size, -1)
+    known = np.isfinite(x)
+    levels = np.unique(x[known])
+    if 2 <= levels.size <= MAX_LEVELS and 2 * levels.size <= known.sum():
+        out[known] = np.searchsorted(levels, x[known])
+        return out, (f"{_MADE} its {levels.size} distinct values "
+                     f"({', '.join(f'{v:g}' for v in levels)})")
+    healthy = known & (x == 0)
+    own_class = healthy.sum() >= 2           # a lone healthy record joins the lowest bin instead
+    pool = known & ~healthy if own_class else known
+    n_bins = min(3, int(pool.sum()) // MIN_PER_BIN)
+    if own_class and pool.any():
+        n_bins = max(n_bins, 1)
+    require(int(own_class) + n_bins >= 2 and levels.size >= 2, "severity_class",
+            f"absent ({int(healthy.sum())} healthy, {int((known & ~healthy).sum())} damaged records)",
+            "a severity_class column, or severities to make two classes of (>= 2 distinct values, and >= 2 "
+            f"healthy records (severity 0) beside damaged ones, or >= {2 * MIN_PER_BIN} records)")
+    first = int(own_class)
+    out[healthy] = 0
+    ranks = pd.Series(x[pool]).rank(method="average").to_numpy()
+    out[pool] = first + np.minimum(((ranks - 0.5) * n_bins / pool.sum()).astype(int), n_bins - 1)
+    parts = []
+    for c in range(int(out.max()) + 1):
+        v = x[out == c]
+        parts.append(f"{v.min():g}-{v.max():g} ({v.size})" if v.min() < v.max() else f"{v.min():g} ({v.size})")
+    if n_bins == 1:
+        which = "healthy and damaged records"
+    else:
+        kind = {2: "halves", 3: "terciles"}[n_bins]
+        which = f"healthy and equal-frequency {kind} of the damaged records" if first else \
+            f"equal-frequency {kind} of the records"
+    return out, f"{_MADE} {which}: " + ", ".join(parts)
+
+
 def _robustness(v: np.ndarray, cls: np.ndarray, groups: np.ndarray, min_cell: int = 1) -> float:
     """``S / (S + N)`` (module docstring); a class's ``N`` from its groups with ``>= min_cell`` records."""
     keep = groups >= 0
@@ -179,8 +252,8 @@ def rank_features(table: pd.DataFrame, feature_columns: list[str] | None = None,
     severity_col : str
         Continuous severity (e.g. pitted area fraction).
     severity_class_col : str or None
-        Severity class labels; if None or missing, the distinct values of
-        ``severity_col`` are the classes.
+        Severity class labels; if None or missing, classes made from ``severity_col``
+        (:func:`severity_classes`; how, in ``attrs["severity_classes"]`` of the result).
     teeth_col : str or None
         Number of pitted teeth; skipped if None or missing.
     nuisance_cols : tuple of str
@@ -197,10 +270,10 @@ def rank_features(table: pd.DataFrame, feature_columns: list[str] | None = None,
             "a DataFrame with >= 3 rows")
     require(severity_col in table.columns, "severity_col", severity_col, "a column of the table: " +
             ", ".join(map(str, table.columns[:12])))
-    cls_col = severity_class_col if severity_class_col in table.columns else severity_col
+    cls_col = severity_class_col if severity_class_col is not None and severity_class_col in table.columns else None
     teeth = teeth_col if teeth_col is not None and teeth_col in table.columns else None
     nuis = [c for c in nuisance_cols if c in table.columns]
-    labels = {severity_col, cls_col, *(c for c in (severity_class_col, teeth_col) if c), *nuisance_cols}
+    labels = {severity_col, *(c for c in (severity_class_col, teeth_col) if c), *nuisance_cols}
     if feature_columns is None:
         feature_columns = [c for c in table.columns if c not in labels and pd.api.types.is_numeric_dtype(table[c])]
     missing = [c for c in feature_columns if c not in table.columns]
@@ -208,7 +281,10 @@ def rank_features(table: pd.DataFrame, feature_columns: list[str] | None = None,
     require(len(feature_columns) >= 1, "feature_columns", feature_columns, "at least one numeric feature column")
 
     sev = table[severity_col].to_numpy(dtype=float)
-    cls = pd.factorize(table[cls_col])[0]
+    if cls_col is not None:
+        cls, how = pd.factorize(table[cls_col])[0], None
+    else:
+        cls, how = severity_classes(sev)
     tee = pd.factorize(table[teeth])[0] if teeth else None
     values = table[feature_columns].to_numpy(dtype=float)
     finite = np.isfinite(values) & np.isfinite(sev)[:, None]
@@ -246,6 +322,8 @@ def rank_features(table: pd.DataFrame, feature_columns: list[str] | None = None,
     out.insert(1, "rank", np.arange(1, len(out) + 1))
     score = out.pop("score")
     out.insert(2, "score", score)
+    if how is not None:
+        out.attrs["severity_classes"] = how
     return out
 
 

@@ -14,6 +14,7 @@ given, so the table is the same for any ``n_jobs``.
 """
 from __future__ import annotations
 
+import warnings
 from dataclasses import asdict, dataclass, fields
 from typing import Literal
 
@@ -210,6 +211,9 @@ def signal_features(x: np.ndarray, config: FeatureConfig, *, fr_pinion_hz: float
         Tachometer channel on the pinion, same shape as ``x``.
     seed : int
         Seed of the EEMD / CEEMDAN noise for this record.
+
+    A record whose decomposition has no IMF (a constant or dead channel) gets NaN ``imf_*`` features and a
+    :class:`NoImfWarning`, not an error.
     """
     a = np.asarray(x, dtype=float)
     require(a.ndim == 1 and a.size >= 64, "x", a.shape, "a 1-D record of >= 64 samples")
@@ -224,13 +228,19 @@ def signal_features(x: np.ndarray, config: FeatureConfig, *, fr_pinion_hz: float
     require(top < fs / 2, "fr_pinion_hz", round(fr_p, 6),
             f"a speed keeping mesh harmonic {config.n_mesh_harmonics} and its sidebands below {fs / 2} Hz")
     track_w = tsa.AngleTrack(track_p.time_s, track_p.angle_rad * ratio)
-    require(track_w.revolutions >= 1 - 1e-9, "x", f"{a.size} samples",
-            f"a record holding >= 1 wheel revolution ({fs / fr_w:.0f} samples at this speed)")
+    # the averages skip the upsampling filter's edge effect at both ends (tsa.angular_resample's skip_edges)
+    edge_n = tsa.TimeInterpolant.UPSAMPLING_HALF_TAPS
+    span = track_w.time_s[-1] - track_w.time_s[0]
+    usable = (np.subtract(*tsa.usable_angle_span(track_w, edge_n / fs)[::-1]) / (2 * np.pi)
+              if span > 2 * edge_n / fs else 0.0)
+    require(usable >= 1 - 1e-9, "x", f"{a.size} samples",
+            f"a record holding >= 1 wheel revolution plus {edge_n} samples at each end "
+            f"({fs / fr_w + 2 * edge_n:.0f} samples at this speed)")
 
     out: dict[str, float] = {f"raw_{k}": float(v) for k, v in statistics.time_domain_statistics(a).items()}
 
     # the mean off first: the resampling's upsampling filter rings at the record's ends in proportion to its end
-    # values, and an offset (an accelerometer's bias) would put that ring into the averages' first samples
+    # values; the averages skip those ends (skip_edges, the default), the mean off keeps the ring small anyway
     a0 = a - a.mean()
     for shaft, track, fr, z in (("pinion", track_p, fr_p, config.z_pinion), ("wheel", track_w, fr_w, config.z_wheel)):
         avg = tsa.synchronous_average(a0, fs, track, samples_per_rev=tsa.default_samples_per_rev(fs, fr))
@@ -238,7 +248,10 @@ def signal_features(x: np.ndarray, config: FeatureConfig, *, fr_pinion_hz: float
                                                   n_sideband_orders=config.tsa_sideband_orders)
         out.update({f"tsa_{shaft}_{k}": v for k, v in ci.items()})
 
-    lines = spectra.mesh_sideband_amplitudes(a, fs, fm_hz=fm, fr_pinion_hz=fr_p, fr_wheel_hz=fr_w,
+    # spectra and envelope of the mean-removed record too: through the window, a mean (an accelerometer's bias, a
+    # transmission error's static part) leaks into the shaft-order lines a few bins from DC, and it would be a
+    # carrier of the envelope
+    lines = spectra.mesh_sideband_amplitudes(a0, fs, fm_hz=fm, fr_pinion_hz=fr_p, fr_wheel_hz=fr_w,
                                              n_harmonics=config.n_mesh_harmonics, n_sidebands=config.n_sidebands,
                                              n_shaft_orders=config.n_shaft_orders, window=config.window)
     out.update({f"spec_{k}": v for k, v in lines.items()})
@@ -249,32 +262,53 @@ def signal_features(x: np.ndarray, config: FeatureConfig, *, fr_pinion_hz: float
         band = None
     elif band == "auto":
         min_hz = min(config.n_mesh_harmonics * fm, 0.25 * fs)  # above the mesh harmonics if room
-        found = env.find_resonance_band(a, fs, min_hz=min_hz)
+        found = env.find_resonance_band(a0, fs, min_hz=min_hz)
         band = found.band_hz
-    out.update(env.envelope_order_amplitudes(a, fs, fr_pinion_hz=fr_p, fr_wheel_hz=fr_w,
+    out.update(env.envelope_order_amplitudes(a0, fs, fr_pinion_hz=fr_p, fr_wheel_hz=fr_w,
                                              n_orders=config.n_shaft_orders, band_hz=band, window=config.window))
     if found is not None:
         out["env_band_centre"] = found.centre_hz
         out["env_band_spectral_kurtosis"] = found.spectral_kurtosis
 
     if config.hht_method != "none":
-        dec = hht.decompose(a, method=config.hht_method, trials=config.hht_trials,
-                            noise_std_ratio=config.hht_noise_std_ratio, seed=int(seed))
-        sel = hht.select_imf(dec.imfs, fs, criterion=config.imf_criterion, fm_hz=fm, imf_number=config.imf_number)
-        imf = dec.imfs[sel.index]
-        energy = hht.energy_index(hht.hilbert_spectrum(imf, fs, n_freq_bins=config.hilbert_bins))
-        _, freq = hht.instantaneous_amplitude_frequency(imf, fs)
-        out.update({
-            "imf_number": float(sel.index + 1),
-            "imf_rms": float(statistics.rms(imf)),
-            "imf_kurtosis": float(statistics.kurtosis(imf)),
-            "imf_crest_factor": float(statistics.crest_factor(imf)),
-            "imf_energy_mean": float(energy.mean()),
-            "imf_energy_std": float(energy.std()),
-            "imf_energy_max": float(energy.max()),
-            "imf_frequency_mean": float(np.sum(freq * energy) / np.sum(energy)) if energy.sum() > 0 else float("nan"),
-        })
+        out.update(_hht_features(a, config, fm, seed))
+        if not np.isfinite(out["imf_number"]):
+            warnings.warn("the record has no IMF (constant, or fewer than three extrema): its imf_* features are NaN",
+                          NoImfWarning, stacklevel=2)
     return out
+
+
+#: the HHT features of a record without IMFs
+HHT_FEATURES: tuple[str, ...] = ("imf_number", "imf_rms", "imf_kurtosis", "imf_crest_factor", "imf_energy_mean",
+                                 "imf_energy_std", "imf_energy_max", "imf_frequency_mean")
+
+
+class NoImfWarning(UserWarning):
+    """A record's decomposition has no IMF (a constant or dead record): its HHT features are NaN."""
+
+
+def _hht_features(a: np.ndarray, config: FeatureConfig, fm: float, seed: int) -> dict[str, float]:
+    """The ``imf_*`` features of one record; NaN when its decomposition has no IMF (a constant record, or one with
+    fewer than three extrema)."""
+    dec = hht.decompose(a, method=config.hht_method, trials=config.hht_trials,
+                        noise_std_ratio=config.hht_noise_std_ratio, seed=int(seed))
+    if dec.n_imfs == 0:
+        return {k: float("nan") for k in HHT_FEATURES}
+    fs = config.fs_hz
+    sel = hht.select_imf(dec.imfs, fs, criterion=config.imf_criterion, fm_hz=fm, imf_number=config.imf_number)
+    imf = dec.imfs[sel.index]
+    energy = hht.energy_index(hht.hilbert_spectrum(imf, fs, n_freq_bins=config.hilbert_bins))
+    _, freq = hht.instantaneous_amplitude_frequency(imf, fs)
+    return {
+        "imf_number": float(sel.index + 1),
+        "imf_rms": float(statistics.rms(imf)),
+        "imf_kurtosis": float(statistics.kurtosis(imf)),
+        "imf_crest_factor": float(statistics.crest_factor(imf)),
+        "imf_energy_mean": float(energy.mean()),
+        "imf_energy_std": float(energy.std()),
+        "imf_energy_max": float(energy.max()),
+        "imf_frequency_mean": float(np.sum(freq * energy) / np.sum(energy)) if energy.sum() > 0 else float("nan"),
+    }
 
 
 def record_seeds(root_seed: int, n: int) -> np.ndarray:
@@ -293,8 +327,15 @@ def _per_record(value, n: int, field: str) -> list:
     return [arr[i] if arr.ndim > 1 else float(arr[i]) for i in range(n)]
 
 
+def _features_quietly(x, config: FeatureConfig, fr_pinion_hz, tacho, seed: int) -> dict[str, float]:
+    """:func:`signal_features` without its :class:`NoImfWarning` (the batch warns once, naming its records)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", NoImfWarning)
+        return signal_features(x, config, fr_pinion_hz=fr_pinion_hz, tacho=tacho, seed=seed)
+
+
 def extract_features(signals: np.ndarray, config: FeatureConfig, *, fr_pinion_hz=None, tachos=None, seeds=None,
-                     n_jobs: int = 1) -> pd.DataFrame:
+                     n_jobs: int = 1, record_names=None) -> pd.DataFrame:
     """Feature table: one row per record, columns ``name[unit]`` (:func:`column_names`).
 
     Parameters
@@ -310,6 +351,11 @@ def extract_features(signals: np.ndarray, config: FeatureConfig, *, fr_pinion_hz
         Per-record EEMD/CEEMDAN seeds; default :func:`record_seeds` of ``config.seed``.
     n_jobs : int
         Worker processes (joblib); the result does not depend on it.
+    record_names : sequence, optional
+        How the warnings name the records (e.g. the dataset's sample indices); default their positions.
+
+    Records without IMFs (a constant or dead channel) get NaN ``imf_*`` features; one :class:`NoImfWarning`
+    names them all.
     """
     x = np.asarray(signals)
     require(x.ndim == 2 and x.shape[0] >= 1, "signals", x.shape, "a 2-D array (records, samples)")
@@ -325,14 +371,21 @@ def extract_features(signals: np.ndarray, config: FeatureConfig, *, fr_pinion_hz
         if config.speed_source != "tacho":
             require(frs[i] is not None and np.isfinite(frs[i]) and frs[i] > 0, f"fr_pinion_hz[{i}]", frs[i],
                     "a finite pinion shaft frequency > 0 (Hz)")
+    names = list(range(n)) if record_names is None else list(record_names)
+    require(len(names) == n, "record_names", len(names), f"{n} names (one per record)")
     tasks = [(x[i], frs[i], tac[i], int(sd[i])) for i in range(n)]
     if n_jobs == 1 or n == 1:
-        rows = [signal_features(xi, config, fr_pinion_hz=fi, tacho=ti, seed=si) for xi, fi, ti, si in tasks]
+        rows = [_features_quietly(xi, config, fi, ti, si) for xi, fi, ti, si in tasks]
     else:
         from joblib import Parallel, delayed
 
-        rows = Parallel(n_jobs=n_jobs)(
-            delayed(signal_features)(xi, config, fr_pinion_hz=fi, tacho=ti, seed=si) for xi, fi, ti, si in tasks)
+        rows = Parallel(n_jobs=n_jobs)(delayed(_features_quietly)(xi, config, fi, ti, si) for xi, fi, ti, si in tasks)
+    if config.hht_method != "none":
+        empty = [str(names[i]) for i, row in enumerate(rows) if not np.isfinite(row["imf_number"])]
+        if empty:
+            warnings.warn(f"{len(empty)} record(s) without IMF (constant, or fewer than three extrema; imf_* "
+                          f"features NaN): {', '.join(empty[:20])}{' ...' if len(empty) > 20 else ''}",
+                          NoImfWarning, stacklevel=2)
     units = feature_units(config)
     data = np.array([[row[k] for k in units] for row in rows], dtype=float)
     return pd.DataFrame(data, columns=[f"{k}[{u}]" for k, u in units.items()])

@@ -85,3 +85,37 @@ def test_select_imf_criteria():
     assert hht.select_imf(d.imfs, FS, criterion="fixed", imf_number=1).index == 0
     with pytest.raises(InputError):
         hht.select_imf(d.imfs, FS, criterion="max_energy")
+
+
+@pytest.mark.parametrize("method", ["emd", "eemd", "ceemdan"])
+def test_a_constant_record_has_no_imf_and_is_its_own_residue(method):
+    """An IMF oscillates (Huang et al. 1998: its extrema and zero crossings differ by at most one), so a constant
+    record has none: zero IMFs and the record as the residue (exact); nothing for select_imf to pick, an
+    InputError naming the IMFs (before: PyEMD's zero IMFs reached np.argmax of an empty array, a bare ValueError;
+    CEEMDAN divided by the record's zero std)."""
+    x = np.full(512, 3.0)
+    d = hht.decompose(x, method=method, trials=3, seed=1)
+    assert d.n_imfs == 0 and d.imfs.shape == (0, 512)
+    np.testing.assert_array_equal(d.residue, x)
+    with pytest.raises(InputError, match="imfs"):
+        hht.select_imf(d.imfs, 12800.0, fm_hz=700.0)
+
+
+def test_a_dead_record_gets_nan_hht_features_and_the_batch_goes_on():
+    """A dead channel (all zeros) among three records, EMD on (the default): its imf_* features are NaN and one
+    NoImfWarning names it; the other records' rows equal their features computed alone (exact: same per-record
+    seeds). Before, np.argmax of the empty IMF scores aborted the whole table."""
+    from features.table import HHT_FEATURES, FeatureConfig, NoImfWarning, extract_features
+
+    x = np.random.default_rng(0).standard_normal((3, 3200))
+    x[1] = 0.0
+    cfg = FeatureConfig(fs_hz=12800.0, z_pinion=29, z_wheel=100)
+    with pytest.warns(NoImfWarning, match=r"1 record\(s\) without IMF.*: dead"):
+        table = extract_features(x, cfg, fr_pinion_hz=25.0, record_names=["a", "dead", "c"])
+    hht_cols = [c for c in table.columns if c.split("[")[0] in HHT_FEATURES]
+    assert len(hht_cols) == 8 and table.loc[1, hht_cols].isna().all()
+    for i in (0, 2):
+        alone = extract_features(x[[i]], cfg, fr_pinion_hz=25.0, seeds=[int(np.uint64(
+            np.random.SeedSequence([0, i]).generate_state(1)[0]))])
+        np.testing.assert_array_equal(table.iloc[[i]].to_numpy(), alone.to_numpy())
+        assert np.isfinite(table.loc[i, hht_cols].to_numpy(dtype=float)).all()

@@ -87,3 +87,29 @@ def test_config_and_input_errors():
         extract_features(np.zeros((1, 12800)), cfg)
     with pytest.raises(InputError, match="wheel revolution"):
         signal_features(np.random.default_rng(0).standard_normal(400), cfg, fr_pinion_hz=25.0)
+
+
+def test_spectrum_and_envelope_features_ignore_the_records_mean():
+    """A record's mean (an accelerometer's bias, a transmission error's static part) carries no line. Lines at the
+    wheel's orders 1 and 2 (7.25, 14.5 Hz: 3.6 and 7.2 bins of a 0.5 s record from DC) and an AM mesh tone: the
+    spectrum reads the wheel's and the pinion's order 1 at their 0.01 (tolerance 2e-4: Hann leakage of the other
+    lines, measured 1.4e-6) and the envelope's order 1 the modulation 0.3 x 0.1 of the mesh tone (Bedrosian's
+    theorem; tolerance 5e-4, measured 1.4e-4 with the low lines in the envelope's band), with or without an offset
+    of 10; every spec_/env_ feature is the same with the offset (rel 1e-6). Before, the record went in with its
+    mean: spec_wheel_order1 read 0.138 (audit t13b: an AM depth of 0.3 read 0.078 with an offset of 2, the offset
+    then a carrier of the envelope)."""
+    fs, fr_p = 12800.0, 25.0
+    fr_w = fr_p * 29 / 100
+    t = np.arange(6400) / fs
+    x = (0.01 * np.cos(2 * np.pi * fr_w * t) + 0.01 * np.cos(2 * np.pi * fr_p * t)
+         + 0.1 * (1 + 0.3 * np.cos(2 * np.pi * fr_p * t + 0.4)) * np.cos(2 * np.pi * 29 * fr_p * t))
+    cfg = FeatureConfig(fs_hz=fs, z_pinion=29, z_wheel=100, hht_method="none")
+    plain = signal_features(x, cfg, fr_pinion_hz=fr_p)
+    offset = signal_features(x + 10.0, cfg, fr_pinion_hz=fr_p)
+    for row in (plain, offset):
+        assert row["spec_wheel_order1"] == pytest.approx(0.01, abs=2e-4)
+        assert row["spec_pinion_order1"] == pytest.approx(0.01, abs=2e-4)
+        assert row["env_pinion_order1"] == pytest.approx(0.1 * 0.3, abs=5e-4)
+    for k in plain:
+        if k.startswith(("spec_", "env_")):
+            assert offset[k] == pytest.approx(plain[k], rel=1e-6, abs=1e-12), k

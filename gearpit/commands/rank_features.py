@@ -16,6 +16,10 @@ Two dataset layouts are read:
    - ``DATASET/index.parquet``: one row per record, in the order of the signals,
      with ``severity`` (required), ``severity_class``, ``n_pitted_teeth``,
      ``speed_rpm`` (pinion speed, required), ``snr_db`` and any other labels;
+     without ``severity_class`` the classes are made from ``severity``
+     (:func:`features.ranking.severity_classes`: its distinct values when few, else
+     healthy records and equal-frequency bins of the damaged ones), said on stderr
+     and atop ``feature_ranking.md``; too few records for two classes is an error;
    - ``DATASET/signals.npy``: float array ``(n_records, n_samples)``;
    - ``DATASET/meta.json``: ``{"fs_hz": ..., "z_pinion": ..., "z_wheel": ...}``
      (optional ``"signal_unit"``; other keys are ignored).
@@ -177,7 +181,10 @@ def run(args) -> int:
     parts = []
     for key, rows in groups.items():
         rows = np.sort(rows)
-        part = extract_features(signals[rows], configs[key], fr_pinion_hz=fr[rows], n_jobs=args.jobs)
+        names = ([f"sample {v}" for v in index["sample_index"].to_numpy()[rows]] if "sample_index" in index.columns
+                 else [f"index row {r}" for r in rows])
+        part = extract_features(signals[rows], configs[key], fr_pinion_hz=fr[rows], n_jobs=args.jobs,
+                                record_names=names)
         part.index = rows
         parts.append(part)
     table = pd.concat(parts).sort_index()
@@ -190,6 +197,9 @@ def run(args) -> int:
         full.to_parquet(tmp, index=False)
 
     ranking = rank_features(full, list(table.columns), seed=args.seed)
+    if "severity_classes" in ranking.attrs:     # the index has no severity_class column
+        print(f"note: {ranking.attrs['severity_classes']}", file=sys.stderr)
+        note = "; ".join(n for n in (note, ranking.attrs["severity_classes"]) if n)
     write_ranking(ranking, out / "feature_ranking.csv", out / "feature_ranking.md", top=args.top, note=note)
     from features.plots import plot_feature_ranking
 
