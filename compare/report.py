@@ -110,6 +110,10 @@ def document(comparison, attribution=None, ledger_rows=(), *, measurement_path: 
         doc["escalation"] = escalation
     if pair_check is not None:
         doc["pair_check"] = pair_check
+    from compare.disagreements import local_fault_note
+
+    if (note := local_fault_note(comparison, attribution)) is not None:
+        doc["local_fault_note"] = note
     return json.loads(json.dumps(doc, default=_default))
 
 
@@ -291,6 +295,8 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
         table = _table(["effect", "error reduction", "error after (dB)", "before (dB)", "worst view rise (dB)",
                         "fitted parameters (1 sigma)", "window", "", "signature"], rows, cls)
         parts.append(table)
+        if doc.get("local_fault_note"):
+            parts.append(f"<p class=\"flag\">{html.escape(doc['local_fault_note'])}</p>")
         parts.append(f"<p>{att['n_simulations']} simulations in {att['elapsed_s']:.1f} s. Sigma '-' means not "
                      "identifiable from these views. An effect is claimed when it lowers the error by 30 % or more "
                      "and raises no view's error by more than 1 dB (or a quarter of its fall of the total, when "

@@ -23,6 +23,10 @@ SCHEMA = {
     "additionalProperties": False,
     "properties": {
         "schema": {"const": "gearpit.compare/2"},
+        "local_fault_note": {"type": "string",
+                             "description": "present when nothing is claimed but one gear's TSA carries a local "
+                                            "tooth fault's signature the model lacks, on the gear the leading "
+                                            "candidate names (compare.disagreements.local_fault_note)"},
         "software_version": {"type": "string"},
         "measurement": {
             "type": "object",

@@ -33,6 +33,7 @@ from compare.candidates import Attribution, AttributionSettings, within_noise
 from compare.calibration import calibration_message
 from compare.channels import resolution_message
 from compare.comparison import Comparison, below_shafts_message, prepare_reference
+from compare.disagreements import local_fault_note
 from compare.escalation import compare_and_attribute, reason_text
 from compare.fitspace import CHAIN_EFFECTS
 from compare.joint_refit import joint_refit_message
@@ -263,6 +264,8 @@ def _run_locked(measurement, measurement_path, mpath: Path, *, add, plugins, att
         messages.append(f"the model agrees with the measurement within the noise (excess error "
                         f"{res.excess_total_db:.2f} dB, below the noise error {res.noise_total_db:.2f} dB): "
                         "there is nothing to attribute, and no effect is claimed")
+    if (msg := local_fault_note(comparison, att)) is not None:
+        messages.append(msg)
     if att is not None and att.claim_order:
         messages.append(att.claim_order)
     if att is not None and att.claimed and att.rivals:
