@@ -3,7 +3,7 @@
 FILES are measurement files with sidecars (:mod:`compare.measurement`), a folder
 of them, or a generated dataset directory. For every record prints the
 predicted severity class with its probability (the confidence), the severity
-fraction and the pitted-teeth class, its novelty (how unlike the training records
+fraction (clipped to [0, 1], with a warning when the regression lay far outside) and the pitted-teeth class, its novelty (how unlike the training records
 its signal is, :mod:`models.novelty`: above 1 it is farther from every class than
 99 % of held-out training records) and a warning when the record lies outside
 what the model was trained on (speed, load or SNR outside the trained range; a
@@ -103,6 +103,7 @@ def warning_summary(pred, data) -> str:
     for col, what in NOTE_COLUMNS:
         if col in data.labels:
             kinds.append((what, data.labels[col].fillna("").astype(str).to_numpy() != ""))
+    kinds.append(("severity regression clipped to [0, 1]", np.array(["severity regression" in v for v in w])))
     kinds.append(("another fs or pair (allowed)", np.array(["differs from the trained" in v or "gear pair named" in v
                                                             for v in w])))
     if pred.novelty is not None:
