@@ -28,7 +28,9 @@ where its mesh phase strays from the constant-speed line by more than
 :data:`~models.order_tracking.TRACK_MIN_RAD` (labels ``mesh_phase_dev_rad``, ``order_tracked``). At a measured
 speed the sidecar's pair is checked too (:func:`pair_warning`, :mod:`compare.pair_check`): a record with no mesh
 line at ``z1`` x its speed, or whose strongest sideband comb is no shaft of the pair, carries a warning
-(``pair_note``) into every prediction made from it; so does a clipped sensor channel (``clip_note``,
+(``pair_note``) into every prediction made from it; a record read at its sidecar's speed (not confirmed by the
+spectrum, or taken as it is) is checked for a mesh line at or near that speed instead (:func:`mesh_line_note`, also
+``pair_note``): without one the prediction is not about a gear mesh; so does a clipped sensor channel (``clip_note``,
 :mod:`compare.quality`). A record whose content below every shaft order exceeds 5 % of its RMS has it removed
 and says so (``drift_note``, :func:`without_drift`).
 """
@@ -148,6 +150,38 @@ def pair_warning(measurement, speed_rpm: float, method: str) -> str:
     est = SpeedEstimate(speed_rpm, float(measurement.speed_rpm), method,
                         constant_track(measurement.n_samples, measurement.fs_hz, fr))
     return pair_message(check_pair(measurement, est)) or ""
+
+
+def mesh_line_note(measurement) -> str:
+    """For a record read at its sidecar's speed (the spectrum did not confirm it, or ``--sidecar-speed``): a
+    warning when no mesh line of the sidecar's pair stands out at that speed nor at the strongest harmonic family
+    within :data:`CONFIRM_WIDTH` half pinion orders of it (the pair check's test,
+    :func:`compare.pair_check.mesh_line_db` >= :data:`~compare.pair_check.MESH_FAMILY_DB`), else "" (also when no
+    mesh harmonic lies below 0.45 fs: nothing to check). Without a mesh line the record holds no mesh of this pair
+    at this speed (white noise, another machine, a pair or speed wrong beyond every search), and a classifier
+    trained on gear meshes still answers with one of its classes."""
+    from compare.pair_check import MESH_FAMILY_DB, PAD, log_power, mesh_line_db
+    from compare.speed import speed_from_spectrum
+
+    nominal = float(measurement.speed_rpm)
+    z = int(measurement.pair.pinion.teeth)
+    fs = float(measurement.fs_hz)
+    width = CONFIRM_WIDTH * min(0.05, 0.5 / z)
+    try:
+        near = speed_from_spectrum(measurement.signal, fs, search_fraction=width, z_pinion=z,
+                                   nominal_rpm=nominal).speed_rpm
+    except InputError:      # no mesh harmonic below 0.45 fs
+        return ""
+    x = np.asarray(measurement.signal, float)
+    logp, n_fft = log_power(x - np.mean(x), PAD)
+    db = [mesh_line_db(logp, n_fft, z * rpm / 60.0 / fs) for rpm in (nominal, near)]
+    if not np.isfinite(db[0]) or max(db) >= MESH_FAMILY_DB:
+        return ""
+    return (f"no mesh line of the sidecar's pair stands out at or near its {nominal:g} rpm ({z} teeth x the speed, "
+            f"{z * nominal / 60.0:.1f} Hz: {db[0]:.1f} dB above the harmonic families beside it; the strongest "
+            f"family within +/-{100 * width:.1f} %, at {near:.1f} rpm: {db[1]:.1f} dB; a mesh line stands out by "
+            f"{MESH_FAMILY_DB:g} dB): the record shows no mesh of this gear pair (no gear, another machine, or a "
+            "pair or speed wrong beyond the search), so the prediction is not about a gear mesh")
 
 
 def tracked_record(measurement, speed_rpm: float, method: str) -> tuple[np.ndarray, float, float]:

@@ -209,6 +209,30 @@ def test_measurement_speed_is_measured_not_taken_from_the_sidecar(workdir, tmp_p
     assert np.isnan(tracked_record(low, 1200.0, "spectrum")[2])
 
 
+def test_a_record_without_a_mesh_line_is_said_not_to_be_about_a_gear_mesh(workdir, tmp_path, capsys):
+    """White noise described as the toy pair at 1200 rpm: the speed search falls back to the sidecar's speed, and
+    the prediction says that no mesh line of the pair stands out at or near it (before, the pair check was skipped
+    at the sidecar's speed and only "speed not confirmed" was said); the same with --sidecar-speed. The toy records
+    at their own speeds (measured, or the sidecar's taken as it is) carry no such warning."""
+    folder = tmp_path / "noise"
+    folder.mkdir()
+    x = np.random.default_rng(5).standard_normal(_toy(1, n=1).n_samples)
+    np.savetxt(folder / "noise.csv", x, header="acc", comments="")
+    (folder / "noise.json").write_text(json.dumps({"fs_hz": FS, "speed_rpm": 1200.0, "torque_nm": 50.0,
+                                                   "pair": "spur-gds", "sensor": "acc"}))
+    toy = tmp_path / "toy"
+    _write_measurements(toy, _toy(11, n=1))
+    files = [str(folder / "noise.csv"), str(toy / "rec0.csv"), str(toy / "rec1.csv")]
+    for extra in ([], ["--sidecar-speed"]):
+        capsys.readouterr()
+        assert main(["predict", str(workdir / "model"), *files, "--json", *extra]) == 0
+        rows = [json.loads(line) for line in capsys.readouterr().out.strip().splitlines()]
+        assert rows[0]["speed_method"] == "sidecar"
+        assert "no mesh line of the sidecar's pair stands out at or near its 1200 rpm" in rows[0]["warning"]
+        assert "not about a gear mesh" in rows[0]["warning"]
+        assert not any("no mesh line of" in r["warning"] for r in rows[1:])
+
+
 def test_predict_refuses_a_wrong_sampling_rate(workdir, capsys):
     """A measurement at another fs: exit code 2 and one line naming fs_hz and the trained value."""
     folder = workdir / "meas_fs"

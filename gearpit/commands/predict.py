@@ -90,7 +90,7 @@ def run(args) -> int:
 
 
 #: the per-record notes of :func:`models.spec.check_input` that come from a label column, and what they are
-NOTE_COLUMNS = (("unit_note", "no sensor_unit for a model that reads levels"), ("speed_note", "a speed note"), ("pair_note", "a pair note"), ("clip_note", "clipped"),
+NOTE_COLUMNS = (("unit_note", "no sensor_unit for a model that reads levels"), ("speed_note", "a speed note"), ("pair_note", "a pair or mesh-line note"), ("clip_note", "clipped"),
                 ("drift_note", "drift removed"))
 
 
