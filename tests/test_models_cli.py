@@ -233,6 +233,29 @@ def test_a_record_without_a_mesh_line_is_said_not_to_be_about_a_gear_mesh(workdi
         assert not any("no mesh line of" in r["warning"] for r in rows[1:])
 
 
+def test_a_model_without_a_healthy_class_says_it_cannot_answer_healthy(workdir, tmp_path, capsys):
+    """A model trained on minor and severe records only calls every record a fault: predict says so once per call
+    (one stderr note for two files, in the table and the JSON modes) and every JSON row carries
+    model_has_healthy_class false; a model with a healthy class says nothing of it (true in its rows)."""
+    data = toy_signal_set(n_per_class=10, fs_hz=FS, z_pinion=29, z_wheel=100, speeds_rpm=(1200.0, 1500.0),
+                          classes=(("minor", 0.1), ("severe", 0.35)), snr_db=20.0, seed=3)
+    _write_dataset(tmp_path / "ds", data)
+    assert main(["train", str(tmp_path / "ds"), "--out", str(tmp_path / "faults"), "--model", "logreg"]) == 0
+    _write_measurements(tmp_path / "meas", _toy(12, n=1))
+    files = [str(tmp_path / "meas" / f"rec{i}.csv") for i in range(2)]
+    for mode in ([], ["--json"]):
+        capsys.readouterr()
+        assert main(["predict", str(tmp_path / "faults"), *files, *mode]) == 0
+        got = capsys.readouterr()
+        assert got.err.count("cannot answer 'healthy'") == 1 and "minor, severe" in got.err
+        if mode:
+            assert [json.loads(r)["model_has_healthy_class"] for r in got.out.splitlines()] == [False, False]
+    assert main(["predict", str(workdir / "model"), *files, "--json"]) == 0
+    got = capsys.readouterr()
+    assert "cannot answer 'healthy'" not in got.err
+    assert [json.loads(r)["model_has_healthy_class"] for r in got.out.splitlines()] == [True, True]
+
+
 def test_predict_refuses_a_wrong_sampling_rate(workdir, capsys):
     """A measurement at another fs: exit code 2 and one line naming fs_hz and the trained value."""
     folder = workdir / "meas_fs"

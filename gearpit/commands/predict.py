@@ -8,7 +8,8 @@ its signal is, :mod:`models.novelty`: above 1 it is farther from every class tha
 99 % of held-out training records) and a warning when the record lies outside
 what the model was trained on (speed, load or SNR outside the trained range; a
 novelty above 1; with ``--allow-mismatch``, a different sampling rate or gear pair). A different
-sampling rate, gear pair or a record too short is refused otherwise.
+sampling rate, gear pair or a record too short is refused otherwise. A model trained without a healthy class
+cannot answer "healthy": said once per call (stderr; ``model_has_healthy_class`` in every JSON / CSV row).
 """
 from __future__ import annotations
 
@@ -20,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from gearpit.errors import require
+from models.data import BINARY_CLASSES
 
 
 def register(sub) -> None:
@@ -59,6 +61,8 @@ def run(args) -> int:
     table = pred.to_frame()
     names = data.labels["file"] if "file" in data.labels else data.labels.get("sample_index", table.index)
     table.insert(0, "record", [str(v) for v in names])
+    # a model without a healthy class calls every record a fault: said once per call (stderr), and in every row
+    table["model_has_healthy_class"] = HEALTHY in model.spec.severity_classes
     # measurement files: the speed the model was given, how it was measured, whether the record was order-tracked
     for col in ("speed_rpm", "speed_method", "order_tracked"):
         if "speed_method" in data.labels and col in data.labels:
@@ -83,10 +87,24 @@ def run(args) -> int:
     summary = warning_summary(pred, data)
     if summary:
         print(f"warning: {summary}; treat them with care", file=sys.stderr)
-    note = no_novelty_note(model)
-    if note:
-        print(note, file=sys.stderr)
+    for note in (no_novelty_note(model), no_healthy_note(model.spec)):
+        if note:
+            print(note, file=sys.stderr)
     return 0
+
+
+#: the class of a gear without a fault (the binary task's first class, the sweeps' healthy bin)
+HEALTHY = BINARY_CLASSES[0]
+
+
+def no_healthy_note(spec) -> str | None:
+    """One line for a model trained without a ``healthy`` class: it cannot answer "healthy", so a healthy gear
+    always gets one of its fault classes; None when it has one."""
+    if HEALTHY in spec.severity_classes:
+        return None
+    return (f"note: this model was trained without a healthy class (its classes: {', '.join(spec.severity_classes)}):"
+            " it cannot answer 'healthy', so a healthy gear always gets one of these fault classes (JSON and CSV: "
+            "model_has_healthy_class false); train with healthy records to tell a healthy gear from a pitted one")
 
 
 #: the per-record notes of :func:`models.spec.check_input` that come from a label column, and what they are
