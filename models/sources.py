@@ -246,7 +246,7 @@ def load_data(paths: list[str | Path], *, channel: str | None = None, pair: str 
               refine_speed: bool = True, spec=None, allow_mismatch: bool = False,
               classes: list[str] | None = None) -> SignalSet | RecordGroups:
     """A generated dataset directory (one path with ``metadata.json``): its signal set; a folder of measurement
-    files, or measurement files: their :class:`~models.record_groups.RecordGroups`, each file read on its own for
+    files, or measurement files and folders of them together: their :class:`~models.record_groups.RecordGroups`, each file read on its own for
     the model of ``spec`` (:func:`models.measurement_files.load_measurement_groups`: ``refine_speed``,
     ``allow_mismatch``, ``classes``)."""
     from models.measurement_files import folder_files, load_measurement_groups
@@ -260,6 +260,20 @@ def load_data(paths: list[str | Path], *, channel: str | None = None, pair: str 
         files, skipped = folder_files(ps[0])
         require(len(files) >= 1, "DATA", str(ps[0]), "a dataset directory or a folder of measurement files with sidecars")
         return load_measurement_groups(files, skipped=tuple(skipped), **kw)
+    # several paths: measurement files and folders of them, a folder read as it is read alone (its files with a
+    # sidecar or a labels.csv row, the rest skipped and reported); a file named twice is read once
+    files, skipped = [], []
     for p in ps:
-        require(p.is_file(), "DATA", str(p), "an existing file")
-    return load_measurement_groups(ps, **kw)
+        if p.is_dir():
+            require(not (p / "metadata.json").is_file(), "DATA", str(p),
+                    "measurement files or folders of them (a dataset directory is given alone)")
+            found, left = folder_files(p)
+            require(len(found) >= 1, "DATA", str(p), "a folder of measurement files with sidecars")
+            files += found
+            skipped += [f"{p.name}/{line}" for line in left]
+        else:
+            require(p.is_file(), "DATA", str(p), "an existing file or folder")
+            files.append(p)
+    seen: set = set()
+    files = [f for f in files if not (f.resolve() in seen or seen.add(f.resolve()))]
+    return load_measurement_groups(files, skipped=tuple(skipped), **kw)

@@ -256,6 +256,25 @@ def test_a_model_without_a_healthy_class_says_it_cannot_answer_healthy(workdir, 
     assert [json.loads(r)["model_has_healthy_class"] for r in got.out.splitlines()] == [True, True]
 
 
+def test_predict_takes_a_folder_and_files_together(workdir, tmp_path, capsys):
+    """A folder beside files in one call (was refused: "got 'folder'; allowed: an existing file"): the folder's
+    measurement files are read as the folder alone reads them (a data file without a sidecar skipped and named), then
+    the files, in the order of the call; a file also in the folder is read once; a dataset directory among other
+    paths is refused, naming it."""
+    _write_measurements(tmp_path / "a", _toy(13, n=1))
+    np.savetxt(tmp_path / "a" / "stray.csv", np.zeros(8))
+    _write_measurements(tmp_path / "b", _toy(14, n=1))
+    capsys.readouterr()
+    assert main(["predict", str(workdir / "model"), str(tmp_path / "a"), str(tmp_path / "b" / "rec1.csv"),
+                 str(tmp_path / "a" / "rec0.csv"), "--json"]) == 0
+    got = capsys.readouterr()
+    assert [json.loads(r)["record"] for r in got.out.splitlines()] == ["rec0.csv", "rec1.csv", "rec1.csv"]
+    assert "stray.csv: skipped" in got.err
+    assert main(["predict", str(workdir / "model"), str(workdir / "ds"), str(tmp_path / "b" / "rec1.csv")]) == 2
+    err = capsys.readouterr().err
+    assert str(workdir / "ds") in err and "a dataset directory is given alone" in err
+
+
 def test_predict_refuses_a_wrong_sampling_rate(workdir, capsys):
     """A measurement at another fs: exit code 2 and one line naming fs_hz and the trained value."""
     folder = workdir / "meas_fs"

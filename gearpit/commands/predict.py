@@ -1,7 +1,7 @@
 """``gearpit predict MODEL FILES``: classify unlabelled measurements.
 
-FILES are measurement files with sidecars (:mod:`compare.measurement`), a folder
-of them, or a generated dataset directory. For every record prints the
+FILES are measurement files with sidecars (:mod:`compare.measurement`), folders
+of them (together in one call), or a generated dataset directory. For every record prints the
 predicted severity class with its probability (the confidence), the severity
 fraction (clipped to [0, 1], with a warning when the regression lay far outside) and the pitted-teeth class, its novelty (how unlike the training records
 its signal is, :mod:`models.novelty`: above 1 it is farther from every class than
@@ -27,7 +27,7 @@ from models.data import BINARY_CLASSES
 def register(sub) -> None:
     p = sub.add_parser("predict", help="classify unlabelled measurements with a trained model", description=__doc__)
     p.add_argument("model", type=Path, metavar="MODEL", help="model directory (gearpit train)")
-    p.add_argument("files", type=Path, nargs="+", metavar="FILES", help="measurement files, a folder, or a dataset")
+    p.add_argument("files", type=Path, nargs="+", metavar="FILES", help="measurement files and folders of them, or a dataset")
     p.add_argument("--out", type=Path, default=None, help="also write the predictions to this CSV")
     p.add_argument("--json", action="store_true", help="print one JSON object per record instead of a table")
     p.add_argument("--channel", default=None, help="dataset channel (default: the model's training channel)")
