@@ -108,8 +108,7 @@ CONFIRM_WIDTH = 3.0
 def measured_speed(measurement) -> tuple[float, str, str]:
     """``(speed_rpm, method, note)`` of a :class:`compare.measurement.Measurement` (module docstring): method
     ``tacho``, ``spectrum`` or ``sidecar``; ``note`` is a warning, or "" ."""
-    from compare.speed import (WIDE_SEARCH_FRACTION, is_mesh_line, off_sidecar_message, refine_speed,
-                               speed_from_spectrum, widened_speed)
+    from compare.speed import WIDE_SEARCH_FRACTION, is_mesh_line, refine_speed, speed_from_spectrum, widened_speed
 
     nominal = float(measurement.speed_rpm)
     if measurement.tacho is not None:
@@ -131,13 +130,25 @@ def measured_speed(measurement) -> tuple[float, str, str]:
     found = widened_speed(measurement.signal, measurement.fs_hz, z_wheel=int(measurement.pair.wheel.teeth), **kw)
     if found is not None:
         rpm = float(found.speed_rpm)
-        return rpm, "spectrum", ("" if abs(rpm / nominal - 1) < 0.98 * half else
-                                 off_sidecar_message(rpm, nominal, CONFIRM_WIDTH * half))
+        return rpm, "spectrum", off_sidecar_note(measurement, rpm)
     return nominal, "sidecar", (f"speed not confirmed by the spectrum: no mesh line within "
                                 f"+/-{100 * WIDE_SEARCH_FRACTION:g} % of the sidecar's {nominal:g} rpm passes the "
                                 "tests of compare.speed.widened_speed (its strongest harmonic family within "
                                 f"+/-{100 * CONFIRM_WIDTH * half:.1f} %: {wide:.1f} rpm); the sidecar's speed is used "
                                 "(give a tachometer channel or the measured speed)")
+
+
+def off_sidecar_note(measurement, speed_rpm: float) -> str:
+    """The warning of a measured speed (the spectrum's, ``method`` ``spectrum``) further than the first search's
+    half order from the sidecar's (:func:`compare.speed.off_sidecar_message`), else "". Called again with the mean
+    speed of a followed record (:func:`tracked_record`), so that the note names the speed the model reads."""
+    from compare.speed import off_sidecar_message
+
+    nominal = float(measurement.speed_rpm)
+    half = min(0.05, 0.5 / int(measurement.pair.pinion.teeth))
+    if abs(speed_rpm / nominal - 1) < 0.98 * half:
+        return ""
+    return off_sidecar_message(speed_rpm, nominal, CONFIRM_WIDTH * half)
 
 
 def pair_warning(measurement, speed_rpm: float, method: str) -> str:
