@@ -44,7 +44,7 @@ import numpy as np
 from gearpit.errors import require
 from models.data import TEETH_CLASSES, SignalSet
 from models.novelty import MIN_HELD_OUT, NoveltyModel, fit_novelty, join_warnings, novelty_warning
-from models.spec import ModelSpec, Predictions, check_input, training_ranges
+from models.spec import ModelSpec, Predictions, bounded_severity, check_input, training_ranges
 
 KINDS: tuple[str, ...] = ("logreg", "rf", "gb")
 TASK_KEYS: tuple[str, ...] = ("sev", "teeth", "reg")
@@ -242,8 +242,8 @@ class FeatureClassifier:
             else:
                 full[:, self.arrays[f"{task}_classes"]] = _raw_output(kind, task, self.arrays, x)
             out[task] = full
-        sev = np.clip(_raw_output(kind, "reg", self.arrays, x), 0.0, None)
-        warnings = warnings if warnings is not None else [""] * n
+        sev, sev_notes = bounded_severity(_raw_output(kind, "reg", self.arrays, x), self.spec.severity_scale)
+        warnings = join_warnings(warnings if warnings is not None else [""] * n, sev_notes)
         nov, batch = None, None
         if NOVELTY_PREFIX + "means" in self.arrays:
             model = self.novelty_model()

@@ -24,7 +24,7 @@ from models.operating import n_operating, operating_features
 from models.representations import represent_crops
 from models.tsa import represent_crops_and_difference, represent_crops_and_residual
 from models.tooth_profile import PROFILE_SPEC, profile_of_difference
-from models.spec import ModelSpec, Predictions, check_input
+from models.spec import ModelSpec, Predictions, bounded_severity, check_input
 
 
 def build_network(spec: ModelSpec) -> GearCNN:
@@ -157,7 +157,8 @@ class CNNClassifier:
             else:
                 with ThreadPoolExecutor(threads) as pool:
                     list(pool.map(run, slices))
-        severity = np.clip(sev / k * self.spec.severity_scale, 0.0, None)
+        severity, sev_notes = bounded_severity(sev / k * self.spec.severity_scale, self.spec.severity_scale)
+        warnings = join_warnings(warnings, sev_notes)
         if self.novelty is not None:
             warnings = join_warnings(warnings, [novelty_warning(v, self.novelty.quantile) for v in nov])
         return Predictions(list(self.spec.severity_classes), list(self.spec.teeth_classes), p_sev / k,

@@ -273,12 +273,17 @@ def _source(files: list[Path]) -> str:
 def _record(m, f: Path, spec, refine_speed: bool, allow_mismatch: bool, mode: str):
     """``(record, reference or None, label row)`` of one measurement, cut to the model's record length."""
     from compare.quality import clipping, clipping_message
-    from models.sources import measured_speed, pair_warning, tracked_record, without_drift
+    from models.sources import (measured_speed, mesh_line_note, off_sidecar_note, pair_warning, tracked_record,
+                                without_drift)
 
     speed, method, note = measured_speed(m) if refine_speed else (float(m.speed_rpm), "sidecar", "")
-    pair_note = pair_warning(m, speed, method) if method != "sidecar" else ""
+    # at a measured speed the pair check; at the sidecar's, whether there is a mesh line at all near it
+    pair_note = pair_warning(m, speed, method) if method != "sidecar" else mesh_line_note(m)
     clip_note = clipping_message(clipping(m.signal), m.sensor) or ""
-    x, speed, dev = tracked_record(m, speed, method) if refine_speed else (m.signal, speed, np.nan)
+    x, tracked, dev = tracked_record(m, speed, method) if refine_speed else (m.signal, speed, np.nan)
+    if note and method == "spectrum" and tracked != speed:
+        note = off_sidecar_note(m, tracked)     # name the followed mean speed, the one the model reads
+    speed = tracked
     x, drift_note = without_drift(x, m, speed)
     if spec is not None:
         x = x[:spec.n_samples]

@@ -28,7 +28,9 @@ where its mesh phase strays from the constant-speed line by more than
 :data:`~models.order_tracking.TRACK_MIN_RAD` (labels ``mesh_phase_dev_rad``, ``order_tracked``). At a measured
 speed the sidecar's pair is checked too (:func:`pair_warning`, :mod:`compare.pair_check`): a record with no mesh
 line at ``z1`` x its speed, or whose strongest sideband comb is no shaft of the pair, carries a warning
-(``pair_note``) into every prediction made from it; so does a clipped sensor channel (``clip_note``,
+(``pair_note``) into every prediction made from it; a record read at its sidecar's speed (not confirmed by the
+spectrum, or taken as it is) is checked for a mesh line at or near that speed instead (:func:`mesh_line_note`, also
+``pair_note``): without one the prediction is not about a gear mesh; so does a clipped sensor channel (``clip_note``,
 :mod:`compare.quality`). A record whose content below every shaft order exceeds 5 % of its RMS has it removed
 and says so (``drift_note``, :func:`without_drift`).
 """
@@ -106,8 +108,7 @@ CONFIRM_WIDTH = 3.0
 def measured_speed(measurement) -> tuple[float, str, str]:
     """``(speed_rpm, method, note)`` of a :class:`compare.measurement.Measurement` (module docstring): method
     ``tacho``, ``spectrum`` or ``sidecar``; ``note`` is a warning, or "" ."""
-    from compare.speed import (WIDE_SEARCH_FRACTION, is_mesh_line, off_sidecar_message, refine_speed,
-                               speed_from_spectrum, widened_speed)
+    from compare.speed import WIDE_SEARCH_FRACTION, is_mesh_line, refine_speed, speed_from_spectrum, widened_speed
 
     nominal = float(measurement.speed_rpm)
     if measurement.tacho is not None:
@@ -129,13 +130,25 @@ def measured_speed(measurement) -> tuple[float, str, str]:
     found = widened_speed(measurement.signal, measurement.fs_hz, z_wheel=int(measurement.pair.wheel.teeth), **kw)
     if found is not None:
         rpm = float(found.speed_rpm)
-        return rpm, "spectrum", ("" if abs(rpm / nominal - 1) < 0.98 * half else
-                                 off_sidecar_message(rpm, nominal, CONFIRM_WIDTH * half))
+        return rpm, "spectrum", off_sidecar_note(measurement, rpm)
     return nominal, "sidecar", (f"speed not confirmed by the spectrum: no mesh line within "
                                 f"+/-{100 * WIDE_SEARCH_FRACTION:g} % of the sidecar's {nominal:g} rpm passes the "
                                 "tests of compare.speed.widened_speed (its strongest harmonic family within "
                                 f"+/-{100 * CONFIRM_WIDTH * half:.1f} %: {wide:.1f} rpm); the sidecar's speed is used "
                                 "(give a tachometer channel or the measured speed)")
+
+
+def off_sidecar_note(measurement, speed_rpm: float) -> str:
+    """The warning of a measured speed (the spectrum's, ``method`` ``spectrum``) further than the first search's
+    half order from the sidecar's (:func:`compare.speed.off_sidecar_message`), else "". Called again with the mean
+    speed of a followed record (:func:`tracked_record`), so that the note names the speed the model reads."""
+    from compare.speed import off_sidecar_message
+
+    nominal = float(measurement.speed_rpm)
+    half = min(0.05, 0.5 / int(measurement.pair.pinion.teeth))
+    if abs(speed_rpm / nominal - 1) < 0.98 * half:
+        return ""
+    return off_sidecar_message(speed_rpm, nominal, CONFIRM_WIDTH * half)
 
 
 def pair_warning(measurement, speed_rpm: float, method: str) -> str:
@@ -148,6 +161,38 @@ def pair_warning(measurement, speed_rpm: float, method: str) -> str:
     est = SpeedEstimate(speed_rpm, float(measurement.speed_rpm), method,
                         constant_track(measurement.n_samples, measurement.fs_hz, fr))
     return pair_message(check_pair(measurement, est)) or ""
+
+
+def mesh_line_note(measurement) -> str:
+    """For a record read at its sidecar's speed (the spectrum did not confirm it, or ``--sidecar-speed``): a
+    warning when no mesh line of the sidecar's pair stands out at that speed nor at the strongest harmonic family
+    within :data:`CONFIRM_WIDTH` half pinion orders of it (the pair check's test,
+    :func:`compare.pair_check.mesh_line_db` >= :data:`~compare.pair_check.MESH_FAMILY_DB`), else "" (also when no
+    mesh harmonic lies below 0.45 fs: nothing to check). Without a mesh line the record holds no mesh of this pair
+    at this speed (white noise, another machine, a pair or speed wrong beyond every search), and a classifier
+    trained on gear meshes still answers with one of its classes."""
+    from compare.pair_check import MESH_FAMILY_DB, PAD, log_power, mesh_line_db
+    from compare.speed import speed_from_spectrum
+
+    nominal = float(measurement.speed_rpm)
+    z = int(measurement.pair.pinion.teeth)
+    fs = float(measurement.fs_hz)
+    width = CONFIRM_WIDTH * min(0.05, 0.5 / z)
+    try:
+        near = speed_from_spectrum(measurement.signal, fs, search_fraction=width, z_pinion=z,
+                                   nominal_rpm=nominal).speed_rpm
+    except InputError:      # no mesh harmonic below 0.45 fs
+        return ""
+    x = np.asarray(measurement.signal, float)
+    logp, n_fft = log_power(x - np.mean(x), PAD)
+    db = [mesh_line_db(logp, n_fft, z * rpm / 60.0 / fs) for rpm in (nominal, near)]
+    if not np.isfinite(db[0]) or max(db) >= MESH_FAMILY_DB:
+        return ""
+    return (f"no mesh line of the sidecar's pair stands out at or near its {nominal:g} rpm ({z} teeth x the speed, "
+            f"{z * nominal / 60.0:.1f} Hz: {db[0]:.1f} dB above the harmonic families beside it; the strongest "
+            f"family within +/-{100 * width:.1f} %, at {near:.1f} rpm: {db[1]:.1f} dB; a mesh line stands out by "
+            f"{MESH_FAMILY_DB:g} dB): the record shows no mesh of this gear pair (no gear, another machine, or a "
+            "pair or speed wrong beyond the search), so the prediction is not about a gear mesh")
 
 
 def tracked_record(measurement, speed_rpm: float, method: str) -> tuple[np.ndarray, float, float]:
@@ -212,7 +257,7 @@ def load_data(paths: list[str | Path], *, channel: str | None = None, pair: str 
               refine_speed: bool = True, spec=None, allow_mismatch: bool = False,
               classes: list[str] | None = None) -> SignalSet | RecordGroups:
     """A generated dataset directory (one path with ``metadata.json``): its signal set; a folder of measurement
-    files, or measurement files: their :class:`~models.record_groups.RecordGroups`, each file read on its own for
+    files, or measurement files and folders of them together: their :class:`~models.record_groups.RecordGroups`, each file read on its own for
     the model of ``spec`` (:func:`models.measurement_files.load_measurement_groups`: ``refine_speed``,
     ``allow_mismatch``, ``classes``)."""
     from models.measurement_files import folder_files, load_measurement_groups
@@ -226,6 +271,20 @@ def load_data(paths: list[str | Path], *, channel: str | None = None, pair: str 
         files, skipped = folder_files(ps[0])
         require(len(files) >= 1, "DATA", str(ps[0]), "a dataset directory or a folder of measurement files with sidecars")
         return load_measurement_groups(files, skipped=tuple(skipped), **kw)
+    # several paths: measurement files and folders of them, a folder read as it is read alone (its files with a
+    # sidecar or a labels.csv row, the rest skipped and reported); a file named twice is read once
+    files, skipped = [], []
     for p in ps:
-        require(p.is_file(), "DATA", str(p), "an existing file")
-    return load_measurement_groups(ps, **kw)
+        if p.is_dir():
+            require(not (p / "metadata.json").is_file(), "DATA", str(p),
+                    "measurement files or folders of them (a dataset directory is given alone)")
+            found, left = folder_files(p)
+            require(len(found) >= 1, "DATA", str(p), "a folder of measurement files with sidecars")
+            files += found
+            skipped += [f"{p.name}/{line}" for line in left]
+        else:
+            require(p.is_file(), "DATA", str(p), "an existing file or folder")
+            files.append(p)
+    seen: set = set()
+    files = [f for f in files if not (f.resolve() in seen or seen.add(f.resolve()))]
+    return load_measurement_groups(files, skipped=tuple(skipped), **kw)

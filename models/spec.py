@@ -234,6 +234,23 @@ def check_input(spec: ModelSpec, data: SignalSet, *, allow_mismatch: bool = Fals
     return ["; ".join(w) for w in per_record]
 
 
+#: a severity regression this far (a fraction of the flank) beyond [0, 1] is reported when it is clipped
+SEVERITY_CLIP_NOTE = 0.1
+
+
+def bounded_severity(raw: np.ndarray, trained_max: float) -> tuple[np.ndarray, list[str]]:
+    """``(severity, notes)``: the severity regression of a batch clipped to ``[0, 1]`` (a pitted fraction of the
+    flank; neither a ridge's linear extrapolation nor the CNN's linear head is bounded by construction), and per
+    record a note where it had to be clipped from more than :data:`SEVERITY_CLIP_NOTE` beyond the interval (else
+    ""): a regression far outside every fraction a flank can have is itself a sign that the record is unlike the
+    training records. ``trained_max``: the largest training severity, named in the note."""
+    raw = np.asarray(raw, dtype=float)
+    notes = [f"severity regression {v:.3g} lies outside [0, 1] (the pitted fraction of a flank; trained up to "
+             f"{trained_max:.3g}), clipped to {min(max(v, 0.0), 1.0):g}: the record is unlike the training records"
+             if (v < -SEVERITY_CLIP_NOTE or v > 1.0 + SEVERITY_CLIP_NOTE) else "" for v in raw]
+    return np.clip(raw, 0.0, 1.0), notes
+
+
 @dataclass(frozen=True)
 class Predictions:
     """Class probabilities, severity and warnings of a batch of records."""

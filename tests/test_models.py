@@ -266,6 +266,43 @@ def test_baseline_arrays_reproduce_scikit_learn_and_survive_save_load(kind, tmp_
     np.testing.assert_array_equal(p.teeth_proba, q.teeth_proba)
 
 
+def test_a_baseline_severity_is_a_fraction_and_a_far_clip_is_said():
+    """A ridge extrapolates linearly: a record 100 standard deviations out on the feature the severity follows gets
+    a regression of ~20 (severity 0-0.2 trained); it is clipped to [0, 1] (a pitted fraction of a flank) and its
+    warning says so, as for -20 (clipped to 0); records like the training ones are neither clipped nor warned."""
+    rng = np.random.default_rng(0)
+    n, f = 90, 3
+    x = rng.standard_normal((n, f))
+    sev = np.clip(0.1 + 0.05 * x[:, 0], 0.0, 0.2)
+    cls = np.where(sev > 0.1, "severe", "minor")
+    labels = pd.DataFrame({"severity": sev, "severity_class": cls, "teeth_class": np.where(x[:, 1] > 0, "1", "2"),
+                           "speed_rpm": 1000.0, "severity_class_index": (cls == "severe").astype(int)})
+    data = SignalSet(np.zeros((n, 64), np.float32), 1000.0, PairInfo("toy", 13, 29), labels)
+    model = fit_baseline(data, "logreg", features=x, feature_names=[f"f{i}" for i in range(f)],
+                         feature_config={"fs_hz": 1000.0})
+    xt = np.zeros((3, f))
+    xt[1, 0], xt[2, 0] = 100.0, -100.0
+    p = model.predict_features(xt)
+    assert p.severity[0] == pytest.approx(0.1, abs=0.02)
+    assert list(p.severity[1:]) == [1.0, 0.0]
+    assert p.warnings[0] == ""
+    assert "severity regression" in p.warnings[1] and "clipped to 1" in p.warnings[1]
+    assert "severity regression" in p.warnings[2] and "clipped to 0" in p.warnings[2]
+
+
+def test_the_cnn_severity_head_is_clipped_to_a_fraction(trained, separable):
+    """The CNN's severity head is a linear layer (unbounded by construction): with its bias raised by 100 it reads
+    ~100 x the trained maximum for every record; every severity is clipped to 1 and warned about."""
+    import copy
+
+    model = copy.deepcopy(trained)
+    with torch.no_grad():
+        model.network.severity.bias += 100.0
+    p = model.predict(separable[1].subset(np.arange(4)))
+    assert list(p.severity) == [1.0] * 4
+    assert all("severity regression" in w and "clipped to 1" in w for w in p.warnings)
+
+
 # ------------------------------------------------------------------ metrics
 
 

@@ -209,6 +209,72 @@ def test_measurement_speed_is_measured_not_taken_from_the_sidecar(workdir, tmp_p
     assert np.isnan(tracked_record(low, 1200.0, "spectrum")[2])
 
 
+def test_a_record_without_a_mesh_line_is_said_not_to_be_about_a_gear_mesh(workdir, tmp_path, capsys):
+    """White noise described as the toy pair at 1200 rpm: the speed search falls back to the sidecar's speed, and
+    the prediction says that no mesh line of the pair stands out at or near it (before, the pair check was skipped
+    at the sidecar's speed and only "speed not confirmed" was said); the same with --sidecar-speed. The toy records
+    at their own speeds (measured, or the sidecar's taken as it is) carry no such warning."""
+    folder = tmp_path / "noise"
+    folder.mkdir()
+    x = np.random.default_rng(5).standard_normal(_toy(1, n=1).n_samples)
+    np.savetxt(folder / "noise.csv", x, header="acc", comments="")
+    (folder / "noise.json").write_text(json.dumps({"fs_hz": FS, "speed_rpm": 1200.0, "torque_nm": 50.0,
+                                                   "pair": "spur-gds", "sensor": "acc"}))
+    toy = tmp_path / "toy"
+    _write_measurements(toy, _toy(11, n=1))
+    files = [str(folder / "noise.csv"), str(toy / "rec0.csv"), str(toy / "rec1.csv")]
+    for extra in ([], ["--sidecar-speed"]):
+        capsys.readouterr()
+        assert main(["predict", str(workdir / "model"), *files, "--json", *extra]) == 0
+        rows = [json.loads(line) for line in capsys.readouterr().out.strip().splitlines()]
+        assert rows[0]["speed_method"] == "sidecar"
+        assert "no mesh line of the sidecar's pair stands out at or near its 1200 rpm" in rows[0]["warning"]
+        assert "not about a gear mesh" in rows[0]["warning"]
+        assert not any("no mesh line of" in r["warning"] for r in rows[1:])
+
+
+def test_a_model_without_a_healthy_class_says_it_cannot_answer_healthy(workdir, tmp_path, capsys):
+    """A model trained on minor and severe records only calls every record a fault: predict says so once per call
+    (one stderr note for two files, in the table and the JSON modes) and every JSON row carries
+    model_has_healthy_class false; a model with a healthy class says nothing of it (true in its rows)."""
+    data = toy_signal_set(n_per_class=10, fs_hz=FS, z_pinion=29, z_wheel=100, speeds_rpm=(1200.0, 1500.0),
+                          classes=(("minor", 0.1), ("severe", 0.35)), snr_db=20.0, seed=3)
+    _write_dataset(tmp_path / "ds", data)
+    assert main(["train", str(tmp_path / "ds"), "--out", str(tmp_path / "faults"), "--model", "logreg"]) == 0
+    _write_measurements(tmp_path / "meas", _toy(12, n=1))
+    files = [str(tmp_path / "meas" / f"rec{i}.csv") for i in range(2)]
+    for mode in ([], ["--json"]):
+        capsys.readouterr()
+        assert main(["predict", str(tmp_path / "faults"), *files, *mode]) == 0
+        got = capsys.readouterr()
+        assert got.err.count("cannot answer 'healthy'") == 1 and "minor, severe" in got.err
+        if mode:
+            assert [json.loads(r)["model_has_healthy_class"] for r in got.out.splitlines()] == [False, False]
+    assert main(["predict", str(workdir / "model"), *files, "--json"]) == 0
+    got = capsys.readouterr()
+    assert "cannot answer 'healthy'" not in got.err
+    assert [json.loads(r)["model_has_healthy_class"] for r in got.out.splitlines()] == [True, True]
+
+
+def test_predict_takes_a_folder_and_files_together(workdir, tmp_path, capsys):
+    """A folder beside files in one call (was refused: "got 'folder'; allowed: an existing file"): the folder's
+    measurement files are read as the folder alone reads them (a data file without a sidecar skipped and named), then
+    the files, in the order of the call; a file also in the folder is read once; a dataset directory among other
+    paths is refused, naming it."""
+    _write_measurements(tmp_path / "a", _toy(13, n=1))
+    np.savetxt(tmp_path / "a" / "stray.csv", np.zeros(8))
+    _write_measurements(tmp_path / "b", _toy(14, n=1))
+    capsys.readouterr()
+    assert main(["predict", str(workdir / "model"), str(tmp_path / "a"), str(tmp_path / "b" / "rec1.csv"),
+                 str(tmp_path / "a" / "rec0.csv"), "--json"]) == 0
+    got = capsys.readouterr()
+    assert [json.loads(r)["record"] for r in got.out.splitlines()] == ["rec0.csv", "rec1.csv", "rec1.csv"]
+    assert "stray.csv: skipped" in got.err
+    assert main(["predict", str(workdir / "model"), str(workdir / "ds"), str(tmp_path / "b" / "rec1.csv")]) == 2
+    err = capsys.readouterr().err
+    assert str(workdir / "ds") in err and "a dataset directory is given alone" in err
+
+
 def test_predict_refuses_a_wrong_sampling_rate(workdir, capsys):
     """A measurement at another fs: exit code 2 and one line naming fs_hz and the trained value."""
     folder = workdir / "meas_fs"

@@ -100,6 +100,27 @@ def test_measurements_are_order_tracked_only_where_the_speed_varies(tmp_path):
     assert _best_corr(_tsa(_record(0.01).x, FR), ref) < 0.7     # the record as measured
 
 
+@pytest.mark.parametrize("off", [1.06, 0.94])
+def test_an_off_sidecar_note_names_the_speed_the_model_reads(tmp_path, off):
+    """A record with a 1 % speed fluctuation whose sidecar is 6 % off: the widened search finds the mesh line, the
+    record is followed and read at its mean speed over the record; the note that the sidecar is off names that
+    speed (to the 0.1 rpm it prints), the one in the table, not the comb's maximum before the tracking (before:
+    the audit's "mesh line at 1100.7 rpm" beside 1100.194 in the table)."""
+    from compare.measurement import load_measurement
+    from models.sources import load_measurements, measured_speed
+
+    s = _record(0.01)
+    pd.DataFrame({"acc": s.x}).to_csv(tmp_path / "drift.csv", index=False)
+    (tmp_path / "drift.json").write_text(json.dumps({"fs_hz": FS, "speed_rpm": off * FR * 60.0, "torque_nm": 50.0,
+                                                     "pair": "spur-gds", "sensor": "acc"}))
+    got = load_measurements([tmp_path / "drift.csv"]).labels
+    assert got["speed_method"][0] == "spectrum" and bool(got["order_tracked"][0])
+    rpm = float(got["speed_rpm"][0])
+    assert f"the mesh line is at {rpm:.1f} rpm" in got["speed_note"][0]
+    first = measured_speed(load_measurement(tmp_path / "drift.csv"))[0]
+    assert f"{first:.1f}" != f"{rpm:.1f}"        # the comb's maximum differs from the followed mean speed
+
+
 def test_a_phase_jump_is_realigned():
     """A record glued from two stretches (here: shifted circularly, 33.3 revolutions in the record, so the mesh
     phase jumps where the ends meet) reads as a brief speed excursion; resampling realigns the revolutions

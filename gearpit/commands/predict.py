@@ -1,14 +1,15 @@
 """``gearpit predict MODEL FILES``: classify unlabelled measurements.
 
-FILES are measurement files with sidecars (:mod:`compare.measurement`), a folder
-of them, or a generated dataset directory. For every record prints the
+FILES are measurement files with sidecars (:mod:`compare.measurement`), folders
+of them (together in one call), or a generated dataset directory. For every record prints the
 predicted severity class with its probability (the confidence), the severity
-fraction and the pitted-teeth class, its novelty (how unlike the training records
+fraction (clipped to [0, 1], with a warning when the regression lay far outside) and the pitted-teeth class, its novelty (how unlike the training records
 its signal is, :mod:`models.novelty`: above 1 it is farther from every class than
 99 % of held-out training records) and a warning when the record lies outside
 what the model was trained on (speed, load or SNR outside the trained range; a
 novelty above 1; with ``--allow-mismatch``, a different sampling rate or gear pair). A different
-sampling rate, gear pair or a record too short is refused otherwise.
+sampling rate, gear pair or a record too short is refused otherwise. A model trained without a healthy class
+cannot answer "healthy": said once per call (stderr; ``model_has_healthy_class`` in every JSON / CSV row).
 """
 from __future__ import annotations
 
@@ -20,12 +21,13 @@ from pathlib import Path
 import numpy as np
 
 from gearpit.errors import require
+from models.data import BINARY_CLASSES
 
 
 def register(sub) -> None:
     p = sub.add_parser("predict", help="classify unlabelled measurements with a trained model", description=__doc__)
     p.add_argument("model", type=Path, metavar="MODEL", help="model directory (gearpit train)")
-    p.add_argument("files", type=Path, nargs="+", metavar="FILES", help="measurement files, a folder, or a dataset")
+    p.add_argument("files", type=Path, nargs="+", metavar="FILES", help="measurement files and folders of them, or a dataset")
     p.add_argument("--out", type=Path, default=None, help="also write the predictions to this CSV")
     p.add_argument("--json", action="store_true", help="print one JSON object per record instead of a table")
     p.add_argument("--channel", default=None, help="dataset channel (default: the model's training channel)")
@@ -59,6 +61,8 @@ def run(args) -> int:
     table = pred.to_frame()
     names = data.labels["file"] if "file" in data.labels else data.labels.get("sample_index", table.index)
     table.insert(0, "record", [str(v) for v in names])
+    # a model without a healthy class calls every record a fault: said once per call (stderr), and in every row
+    table["model_has_healthy_class"] = HEALTHY in model.spec.severity_classes
     # measurement files: the speed the model was given, how it was measured, whether the record was order-tracked
     for col in ("speed_rpm", "speed_method", "order_tracked"):
         if "speed_method" in data.labels and col in data.labels:
@@ -83,14 +87,28 @@ def run(args) -> int:
     summary = warning_summary(pred, data)
     if summary:
         print(f"warning: {summary}; treat them with care", file=sys.stderr)
-    note = no_novelty_note(model)
-    if note:
-        print(note, file=sys.stderr)
+    for note in (no_novelty_note(model), no_healthy_note(model.spec)):
+        if note:
+            print(note, file=sys.stderr)
     return 0
 
 
+#: the class of a gear without a fault (the binary task's first class, the sweeps' healthy bin)
+HEALTHY = BINARY_CLASSES[0]
+
+
+def no_healthy_note(spec) -> str | None:
+    """One line for a model trained without a ``healthy`` class: it cannot answer "healthy", so a healthy gear
+    always gets one of its fault classes; None when it has one."""
+    if HEALTHY in spec.severity_classes:
+        return None
+    return (f"note: this model was trained without a healthy class (its classes: {', '.join(spec.severity_classes)}):"
+            " it cannot answer 'healthy', so a healthy gear always gets one of these fault classes (JSON and CSV: "
+            "model_has_healthy_class false); train with healthy records to tell a healthy gear from a pitted one")
+
+
 #: the per-record notes of :func:`models.spec.check_input` that come from a label column, and what they are
-NOTE_COLUMNS = (("unit_note", "no sensor_unit for a model that reads levels"), ("speed_note", "a speed note"), ("pair_note", "a pair note"), ("clip_note", "clipped"),
+NOTE_COLUMNS = (("unit_note", "no sensor_unit for a model that reads levels"), ("speed_note", "a speed note"), ("pair_note", "a pair or mesh-line note"), ("clip_note", "clipped"),
                 ("drift_note", "drift removed"))
 
 
@@ -103,6 +121,7 @@ def warning_summary(pred, data) -> str:
     for col, what in NOTE_COLUMNS:
         if col in data.labels:
             kinds.append((what, data.labels[col].fillna("").astype(str).to_numpy() != ""))
+    kinds.append(("severity regression clipped to [0, 1]", np.array(["severity regression" in v for v in w])))
     kinds.append(("another fs or pair (allowed)", np.array(["differs from the trained" in v or "gear pair named" in v
                                                             for v in w])))
     if pred.novelty is not None:
