@@ -54,7 +54,7 @@ SCHEMA = {
                                                "description": "RMS deviation of the slow mesh phase from a "
                                                               "constant speed (rad, first mesh harmonic): from the "
                                                               "tachometer's pulses, or without one from two mesh "
-                                                              "harmonics (compare.speed.drift_track); null: not "
+                                                              "harmonics (compare.speed_track.drift_track); null: not "
                                                               "measured (no two clear harmonics)"},
                            "speed_tracked": {"type": "boolean",
                                              "description": "the measurement's views follow that drift"},

@@ -5,7 +5,7 @@ test rig and on the two other drive trains of :data:`compare.synthetic.OTHER_RIG
 cases (``experiments/foreign_rig_check.py``) and the unseen rigs (``experiments/unseen_rigs_check.py``). Printed
 per rig: questioned (no mesh line where the comparison reads it), other_family (a decisive sideband comb at a count
 that is no shaft of the pair), the mesh-line score (dB) and the comb's count and contrast, and the speed drift
-read from the mesh phase when the tachometer is left out (:func:`compare.speed.drift_track`). None should be
+read from the mesh phase when the tachometer is left out (:func:`compare.speed_track.drift_track`). None should be
 questioned and none tracked (their mean speed is constant); other_family marks the rigs whose fluctuation (or
 rattle) makes a comb of its own.
 
@@ -44,7 +44,7 @@ def measurements():
 
 def without_tacho(m):
     """The measurement without its tachometer channel (the speed then comes from the spectrum, and its drift from
-    the mesh phase: compare.speed.drift_track)."""
+    the mesh phase: compare.speed_track.drift_track)."""
     import dataclasses
 
     from compare.measurement import measurement_from_arrays

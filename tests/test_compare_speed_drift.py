@@ -1,4 +1,4 @@
-"""A measurement without a tachometer whose speed drifts slowly (compare.speed.drift_track).
+"""A measurement without a tachometer whose speed drifts slowly (compare.speed_track.drift_track).
 
 Truth from outside the comparison: the simulator's own speed drift (a speed fluctuation at 0.35 Hz, far below
 the wheel's rotation, whose mesh-phase excursion is known in closed form) and its constant-speed rigs."""
