@@ -22,9 +22,9 @@ softer than the linear value, so the mean mesh stiffness falls (by 14 % on
 dips where a pair enters or leaves contact with little load are deeper.
 Raising the torque raises ``k_h`` as ``F^0.1``.
 
-Approximations: with ``pit_model="weak_spring"`` the pitted slices' stiffness
-(which already omits the linear Hertz term) is corrected the same way as the
-healthy ones; the force is the transverse line-of-action force (for helical
+Approximations: with ``pit_model="weak_spring"`` the pitted slices (whose
+Hertz compliance is that of a weak spring, :data:`datagen.pit_stiffness.WEAK_SPRING_RATIO`)
+have one linear Hertz term replaced as the healthy ones, the weakening kept; the force is the transverse line-of-action force (for helical
 pairs the normal load is larger by ``1 / cos(beta_b)``).
 
 Signature (checked in ``tests/test_effects_signatures.py``)
