@@ -1,6 +1,8 @@
 """Model versus measurement: one error, many views, and which effect is missing.
 
 - ``formats``       readers: CSV/TXT, NPY, NPZ, WAV, MAT (v7.3 via h5py), MCC5-THU, PHM 2023, SEU layouts
+- ``array_files``   the NPY, NPZ, WAV and MAT readers (structs flattened, the file's own sampling rate)
+- ``raw_record``    what every reader returns, before validation
 - ``measurement``   sidecar (JSON/TOML), loading and validation -> :class:`Measurement`
 - ``speed``         speed refined from the tachometer or the mesh harmonics; the shaft angle track
 - ``spectra``       order-domain records (pinion and wheel angle), power and envelope spectra, noise floors

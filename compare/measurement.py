@@ -60,7 +60,8 @@ from typing import Any
 
 import numpy as np
 
-from compare.formats import FORMATS, FS_KEYS, read_record
+from compare.array_files import FS_KEYS
+from compare.formats import FORMATS, read_record
 from compare.sensor_units import check_sensor_unit, unit_factor
 from compare.text_records import MIN_FS_HZ
 from gearpit.errors import InputError, require, require_positive
@@ -338,9 +339,9 @@ class Measurement:
 
 def _channel(ref, names: tuple, where: str, no_index: str = "", columns: tuple = ()) -> str:
     """The channel ``ref`` (a name, or a 0-based index in the file's order) names. ``columns``: the file's columns
-    as written, a time column included (:attr:`compare.formats.RawRecord.columns`; empty: ``names``), which an
+    as written, a time column included (:attr:`compare.raw_record.RawRecord.columns`; empty: ``names``), which an
     index counts, and an index at the time column is refused; ``no_index``: why the file's order is not known
-    (:attr:`compare.formats.RawRecord.no_index`), which refuses an index."""
+    (:attr:`compare.raw_record.RawRecord.no_index`), which refuses an index."""
     if isinstance(ref, int):
         require(not no_index, where, ref, f"a channel name ({no_index}, so a column index could name the wrong "
                 "channel): one of " + ", ".join(names))
@@ -449,7 +450,7 @@ def measurement_from_arrays(channels: dict, sidecar: Sidecar, *, source: str = "
 
 def _columns_as_written(rec, names: tuple) -> tuple:
     """The sidecar's ``names`` of ``rec``'s data columns, with a time column the reader took out
-    (:attr:`compare.formats.RawRecord.columns`) put back in its place: the file's columns as written."""
+    (:attr:`compare.raw_record.RawRecord.columns`) put back in its place: the file's columns as written."""
     if len(rec.columns) <= len(rec.names):
         return tuple(names)
     i = next((j for j, (a, b) in enumerate(zip(rec.columns, rec.names)) if a != b), len(rec.names))
