@@ -1,7 +1,10 @@
 """Model versus measurement: one error, many views, and which effect is missing.
 
 - ``formats``       readers: CSV/TXT, NPY, NPZ, WAV, MAT (v7.3 via h5py), MCC5-THU, PHM 2023, SEU layouts
-- ``measurement``   sidecar (JSON/TOML), loading and validation -> :class:`Measurement`
+- ``array_files``   the NPY, NPZ, WAV and MAT readers (structs flattened, the file's own sampling rate)
+- ``raw_record``    what every reader returns, before validation
+- ``sidecar``       the sidecar (JSON/TOML): what a file cannot say (operating point, pair, channels); found beside it
+- ``measurement``   loading and validation of a file with its sidecar -> :class:`Measurement`
 - ``speed``         speed refined from the tachometer or the mesh harmonics; the shaft angle track
 - ``spectra``       order-domain records (pinion and wheel angle), power and envelope spectra, noise floors
 - ``plan``          the named physical locations of a comparison, fixed once from the measurement

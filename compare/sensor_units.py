@@ -9,7 +9,7 @@ The sidecar names that unit and the record is brought to SI once, where the file
   displacement ``"m"``, ``"mm"``, ``"um"``;
 * a signal unit (:data:`SIGNAL_UNITS`): ``"V"`` or ``"mV"`` (the sensor's output voltage), ``"counts"`` (ADC
   integers) or ``"fullscale"`` (fractions of the converter's full scale; gearpit reads an integer WAV file so,
-  scaled to [-1, 1): :func:`compare.formats.read_wav`), with ``sensor_sensitivity``, how many of the file's
+  scaled to [-1, 1): :func:`compare.array_files.read_wav`), with ``sensor_sensitivity``, how many of the file's
   units one ``sensor_sensitivity_unit`` (a physical unit of the quantity) gives: an accelerometer of
   100 mV/g recorded in mV is ``sensor_sensitivity = 100``, ``sensor_sensitivity_unit = "g"``; recorded in V,
   ``0.1``; through a converter whose full scale is 5 V, as ``fullscale``, ``0.02`` (full scale = 50 g).

@@ -1,6 +1,6 @@
 """A sidecar to fill in, written beside a measurement that has none.
 
-A recording from another rig arrives without the operating point gearpit needs (:mod:`compare.measurement`).
+A recording from another rig arrives without the operating point gearpit needs (:mod:`compare.sidecar`).
 Rather than only refusing it, :func:`write_template` reads the file (its layout, channel names and any rate it
 states) and writes ``<file>.toml.template`` beside it: every key the comparison needs, the file's own channel
 names in place (listed beside ``sensor``), the required values left at 0 or empty (``pair = ""``, ``sensor = ""``),

@@ -15,7 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from compare.measurement import Sidecar, measurement_from_arrays
+from compare.measurement import measurement_from_arrays
+from compare.sidecar import Sidecar
 from gearpit.errors import require
 
 #: drive-train fields of the 'rig' that differ from the model's defaults

@@ -38,7 +38,7 @@ from compare.escalation import compare_and_attribute, reason_text
 from compare.fitspace import CHAIN_EFFECTS
 from compare.joint_refit import joint_refit_message
 from compare.ledger import append_row, fit_provenance_warnings, last_fit, ledger_path, make_row, read_ledger
-from compare.measurement import find_sidecar, load_measurement
+from compare.measurement import load_measurement
 from compare.model import ComparisonModel, parse_add
 from compare.model_lock import lock_path, model_lock
 from compare.pair_check import check_pair, pair_message
@@ -46,6 +46,7 @@ from compare.quality import clipping_message
 from compare.report import document, write_html, write_json
 from compare.response import attach_responses
 from compare.sideband_fit import sideband_fit_message
+from compare.sidecar import find_sidecar
 from compare.speed import speed_message
 from datagen.effects import EffectSpec, get, load_plugin
 from gearpit.atomic import check_output_path
@@ -78,7 +79,7 @@ def check_outputs(measurement_path, meta, model_path: Path, *, report=None, json
     ledger and settled model) nor both the same file."""
     m = Path(measurement_path)
     inputs = [m, meta, model_path, ledger_path(model_path), settled_path(model_path), lock_path(model_path)]
-    if meta is None:   # the sidecar found beside the measurement (compare.measurement.find_sidecar)
+    if meta is None:   # the sidecar found beside the measurement (compare.sidecar.find_sidecar)
         try:
             inputs.append(find_sidecar(m))
         except InputError:

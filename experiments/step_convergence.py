@@ -36,7 +36,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from compare.comparison import evaluate, prepare_reference  # noqa: E402
-from compare.measurement import Sidecar, measurement_from_arrays  # noqa: E402
+from compare.measurement import measurement_from_arrays  # noqa: E402
+from compare.sidecar import Sidecar  # noqa: E402
 from compare.synthetic import NUISANCE, OTHER_RIGS  # noqa: E402
 from datagen.case_options import SolverOptions  # noqa: E402
 from datagen.geometry import preset  # noqa: E402

@@ -51,7 +51,7 @@ MAX_REFERENCE_SPEED_OFFSET = 0.05
 def folder_files(folder: str | Path) -> tuple[list[Path], list[str]]:
     """``(files, skipped)``: the data files of ``folder`` to read (a sidecar beside them, or listed in
     ``labels.csv``: refused later by name), and one line per data file skipped (no sidecar, not listed)."""
-    from compare.measurement import NoSidecarError, find_sidecar
+    from compare.sidecar import NoSidecarError, find_sidecar
 
     root = Path(folder)
     table = read_labels(root)
@@ -72,7 +72,8 @@ def folder_files(folder: str | Path) -> tuple[list[Path], list[str]]:
 
 def _sidecar(f: Path):
     """The sidecar of ``f``; none: refused by name, a template written beside it (as ``gearpit compare`` does)."""
-    from compare.measurement import NoSidecarError, find_sidecar, load_measurement, read_sidecar
+    from compare.measurement import load_measurement
+    from compare.sidecar import NoSidecarError, find_sidecar, read_sidecar
 
     try:
         path = find_sidecar(f)
@@ -93,7 +94,7 @@ def _sidecar(f: Path):
 def read_as(f: Path, sidecar, spec) -> str:
     """The quantity ``f``'s sensor channel is read as for ``spec``'s model (module docstring); refused where only
     integration could give it."""
-    from compare.measurement import SENSOR_QUANTITIES
+    from compare.sidecar import SENSOR_QUANTITIES
 
     trained = channel_quantity(spec.channel) if spec is not None else None
     given = sidecar.sensor_quantity

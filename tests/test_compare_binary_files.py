@@ -1,6 +1,6 @@
 """NPY, NPZ and MAT files as they arrive damaged or written by MATLAB: one-line refusals, never a traceback and
 never an unpickled object; MAT v7.3 structs with text and empty fields; the rate stored in the file
-(compare.formats).
+(compare.array_files).
 
 Source of truth: the README's table of measurement files ("Refused with one line naming the field") and the MAT
 v7.3 layout MATLAB writes (HDF5; a char array is a uint16 dataset with attribute MATLAB_class = "char", an empty

@@ -1,5 +1,5 @@
 """Which channel a sidecar's ``sensor``/``tacho`` selects: a 0-based index counts the file's channels in the order
-the file holds them (compare.formats, compare.measurement).
+the file holds them (compare.formats, compare.array_files, compare.measurement).
 
 Source of truth: the README's table of measurement files and the sidecar key ``sensor`` ("channel name or 0-based
 column index"); each test writes its own small file with one tone among other channels and checks that the tone is

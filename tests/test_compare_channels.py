@@ -14,7 +14,8 @@ import pytest
 
 from compare.candidates import Attribution, AttributionSettings, CandidateResult
 from compare.channels import Resolution, apply_resolution, resolution_message, resolve_rivals
-from compare.measurement import Sidecar, measurement_from_arrays, simulated_channels
+from compare.measurement import Sidecar, measurement_from_arrays
+from compare.sidecar import simulated_channels
 from compare.synthetic import case_checks, check_fit, run_hidden_case
 from gearpit.errors import InputError
 

@@ -1,7 +1,9 @@
-"""Measurement loading: every file layout, the sidecar, and the refusals (compare.formats, compare.measurement).
+"""Measurement loading: every file layout, the sidecar, and the refusals (compare.formats, compare.array_files,
+compare.sidecar, compare.measurement).
 
-Source of truth: the layouts documented in compare/formats.py and compare/measurement.py (and, for the public
-datasets, ../shared/data/spectraquest_gfd/README.md); each test writes its own small file.
+Source of truth: the layouts and the sidecar documented in compare/formats.py, compare/array_files.py,
+compare/sidecar.py and compare/measurement.py (and, for the public datasets,
+../shared/data/spectraquest_gfd/README.md); each test writes its own small file.
 """
 from __future__ import annotations
 

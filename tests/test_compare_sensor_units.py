@@ -73,7 +73,7 @@ def test_a_velocity_or_displacement_unit_is_brought_to_si_before_the_derivative(
 
 
 def test_an_integer_wav_declared_fullscale_reads_in_si(tmp_path):
-    """An int16 WAV is read as fractions of full scale ([-1, 1), compare.formats.read_wav); with its full scale
+    """An int16 WAV is read as fractions of full scale ([-1, 1), compare.array_files.read_wav); with its full scale
     declared (0.02 per g: full scale 50 g) it reads in m/s^2 to the converter's resolution."""
     from scipy.io import wavfile
 

@@ -1,6 +1,6 @@
-"""Measurement files as loggers, spreadsheets and MATLAB write them (compare.text_records, compare.formats): each
-file is written here from known samples, read back, and compared with them value for value; the rate must be
-the one the file states."""
+"""Measurement files as loggers, spreadsheets and MATLAB write them (compare.text_records, compare.formats,
+compare.array_files): each file is written here from known samples, read back, and compared with them value for
+value; the rate must be the one the file states."""
 from __future__ import annotations
 
 import numpy as np

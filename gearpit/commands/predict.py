@@ -1,6 +1,6 @@
 """``gearpit predict MODEL FILES``: classify unlabelled measurements.
 
-FILES are measurement files with sidecars (:mod:`compare.measurement`), folders
+FILES are measurement files with sidecars (:mod:`compare.measurement`, :mod:`compare.sidecar`), folders
 of them (together in one call), or a generated dataset directory. For every record prints the
 predicted severity class with its probability (the confidence), the severity
 fraction (clipped to [0, 1], with a warning when the regression lay far outside) and the pitted-teeth class, its novelty (how unlike the training records
