@@ -37,22 +37,9 @@ def _write(folder, name, x, **side):
 @pytest.fixture(scope="module")
 def model(tmp_path_factory):
     """A logistic-regression baseline on 20 toy records of 4096 samples (healthy / severe), in m/s^2."""
-    from datagen.dataset import finalize, write_shard
+    from toy_models import trained_toy_model
 
-    root = tmp_path_factory.mktemp("units")
-    data = _toy(1)
-    ds = root / "ds"
-    (ds / "shards").mkdir(parents=True)
-    n = len(data)
-    meta = {"format": "gearpit-dataset", "format_version": 1, "name": "toy", "channels": ["acc_m_s2"], "fs_hz": FS,
-            "n_time": data.n_samples, "n_samples": n, "shard_size": n, "n_shards": 1,
-            "pairs": {"spur-gds": {"z_pinion": 29, "z_wheel": 100}}}
-    (ds / "metadata.json").write_text(json.dumps(meta))
-    write_shard(ds, 0, data.signals[:, None, :], data.labels.assign(sample_index=np.arange(n), pair="spur-gds")
-                .to_dict(orient="records"), [])
-    finalize(ds)
-    assert main(["train", str(ds), "--out", str(root / "m"), "--model", "logreg"]) == 0
-    return root / "m"
+    return trained_toy_model(tmp_path_factory.mktemp("units"), _toy(1), FS)
 
 
 def _predict(model, files, capsys):
