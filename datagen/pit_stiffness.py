@@ -63,7 +63,7 @@ def normalise_pits(pair, pits) -> tuple[PitMap, ...]:
         require(pm.gear not in seen, "pits.gear", pm.gear, "at most one pit map per gear")
         seen.add(pm.gear)
         expected = pair.flank_grid(pm.gear, pm.grid.n_profile, pm.grid.n_face)
-        for name in ("profile_length_m", "face_width_m"):
+        for name in ("profile_length_m", "face_width_m", "contact_face_width_m"):
             got, want = getattr(pm.grid, name), getattr(expected, name)
             if not math.isclose(got, want, rel_tol=1e-6):
                 raise InputError(f"pits.grid.{name}", got, f"{want:.6g} (the {pm.gear} flank of pair {pair.name})")
