@@ -38,6 +38,14 @@ def test_pits_in_the_non_contact_strips_do_not_count():
     d[:, strip] = 0.2e-3
     pm = PitMap(grid=grid, depth_m={0: d}, gear="pinion")
     assert pm.severity(0) == 0.0
+    # the stiffness of the columns wholly outside the band (a column whose centre is outside but which reaches
+    # into the band contacts over that part: the slices see it, the centre-rule severity does not)
+    off = (HELICAL.pinion.face_width_m - HELICAL.contact_face_width_m) / 2
+    edges = np.arange(grid.n_face + 1) * grid.dw_m
+    outside = (edges[1:] <= off) | (edges[:-1] >= HELICAL.pinion.face_width_m - off)
+    d = np.zeros(grid.shape)
+    d[:, outside] = 0.2e-3
+    pm = PitMap(grid=grid, depth_m={0: d}, gear="pinion")
     h = mesh_stiffness(HELICAL, positions_per_cycle=8)
     p = mesh_stiffness(HELICAL, pits=pm, positions_per_cycle=8, n_slices=h.n_slices)
     np.testing.assert_allclose(p.k_n_per_m, h.k_n_per_m, rtol=1e-12)   # summation order only
