@@ -263,22 +263,35 @@ def _sized_ellipse(grid: FlankGrid, target: int, aspect: float):
     w_lo, w_hi = _band(grid)
     centre_w = grid.face_width_m / 2 if w_lo == 0.0 else (w_lo + w_hi) / 2
 
-    def place(k: float):
+    def place(k: float, shift_s: float, shift_w: float):
         axis_s = k * fit_s
-        rows, cols, r = _radius(grid, "ellipse", _centre_s(grid, axis_s), centre_w,
+        rows, cols, r = _radius(grid, "ellipse", _centre_s(grid, axis_s) + shift_s, centre_w + shift_w,
                                 axis_s / 2, axis_s * aspect / 2, 0.0)
         return rows, cols, r, int(np.count_nonzero(r <= 1.0))
 
-    lo, hi = 0.0, 1.0 + 1e-9
-    best = place(hi)
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        cand = place(mid)
+    def bisect(shift_s: float, shift_w: float):
+        lo, hi = 0.0, 1.0 + 1e-9
+        best = place(hi, shift_s, shift_w)
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            cand = place(mid, shift_s, shift_w)
+            if abs(cand[3] - target) < abs(best[3] - target):
+                best = cand
+            if cand[3] == target:
+                break
+            lo, hi = (mid, hi) if cand[3] < target else (lo, mid)
+        return best
+
+    # a centre on a pixel corner or edge (even row or column counts) grows the ellipse in pairs or fours of
+    # pixels, so an odd target (a single pixel) may be missed or come back empty: then the centre also tries the
+    # nearest pixel centres (half a pixel off) and the count closest to the target wins (the first on a tie)
+    best = bisect(0.0, 0.0)
+    for shift in ((0.0, grid.dw_m / 2), (grid.ds_m / 2, 0.0), (grid.ds_m / 2, grid.dw_m / 2)):
+        if best[3] == target:
+            break
+        cand = bisect(*shift)
         if abs(cand[3] - target) < abs(best[3] - target):
             best = cand
-        if cand[3] == target:
-            break
-        lo, hi = (mid, hi) if cand[3] < target else (lo, mid)
     return best[:3]
 
 
