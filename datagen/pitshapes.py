@@ -389,7 +389,12 @@ def cluster(grid: FlankGrid, *, target_severity: float, rng: np.random.Generator
     while count < target:
         if k >= max_pits:
             raise InputError("pits.severity", target_severity,
-                             f"a severity reached with at most {max_pits} pits (got {count / n_pix:.4f})")
+                             f"a severity this {grid.n_profile}x{grid.n_face} grid resolves for pits of "
+                             f"{size * 1e3:.3g} mm on {grid.ds_m * 1e3:.3g} x {grid.dw_m * 1e3:.3g} mm pixels: "
+                             f"growth stalled at {count / n_pix:.4f} after {max_pits} pits (the grid's resolution "
+                             f"limits it, not the cluster limit {CLUSTER_MAX_SEVERITY}); nearest reachable here: "
+                             f"{count / n_pix:.4f} or below, in steps of {1 / n_pix:.4f}; use a finer grid or a "
+                             f"larger pit_diameter_mm")
         if k % _BATCH == 0:
             draw = rng.random((_BATCH, 5))
             normal = rng.standard_normal((_BATCH, 2))

@@ -28,3 +28,14 @@ def test_small_odd_requests_are_met(grid_px):
     for k in (1, 3, 5):
         pm = make_pit_map(grid, shape="ellipse", severity={0: k / grid.n_active_pixels})
         assert int(pm.mask(0).sum()) == k
+
+
+def test_coarse_grid_refusal_names_the_resolution():
+    """An 8x12 grid stalls a 0.25 cluster at 0.2083; the refusal said "at most 50000 pits" while the limit is 0.6.
+    It now names the grid's resolution and the reachable severity."""
+    from gearpit.errors import InputError
+
+    grid = preset("spur-gds").flank_grid("pinion", 8, 12)
+    with pytest.raises(InputError, match="resolution") as err:
+        make_pit_map(grid, shape="cluster", severity={0: 0.25}, seed=0)
+    assert "stalled at" in str(err.value)
