@@ -3,8 +3,18 @@
 A flank is an image: rows are the profile position ``s`` (involute arc length,
 m) from the start of the active profile (row 0) to the tip (last row); columns
 are the face position ``w`` (m) from one face edge (column 0) to the other.
-Rows are uniform in arc length, so every pixel has the same area and the
-severity (pitted area / active flank area) is the fraction of pitted pixels.
+Rows are uniform in arc length, so every pixel has the same area.
+
+The active flank is where the tooth can touch its mate: from the start of the
+active profile to the tip (all rows), across the contact face width (the
+narrower gear's face, centred on the wider one, as in
+:mod:`datagen.pit_stiffness`). On the wider gear of a pair with unequal face
+widths the columns outside that band never make contact. The severity (pitted
+area / active flank area) is the pitted fraction of the pixels of the active
+band (:attr:`FlankGrid.active_cols`: the columns whose centre lies in it); pits
+a user's map or photo puts in the non-contact strips are kept but do not count
+(nor do they change the mesh stiffness). With equal face widths every column is
+active.
 
 A pit map holds, per pitted tooth, the pit depth (m) of every pixel; 0 means
 intact. Depth matters to the stiffness (section loss), the boolean mask to the
@@ -12,6 +22,7 @@ contact.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -38,6 +49,9 @@ class FlankGrid:
     pitch_s_m : float
         Arc length from the start of active profile to the pitch circle (m);
         where real pitting starts.
+    contact_face_width_m : float, optional
+        Face width in contact with the mate (m), centred on this gear's face;
+        default (None) the whole face width.
     """
 
     n_profile: int
@@ -45,6 +59,7 @@ class FlankGrid:
     profile_length_m: float
     face_width_m: float
     pitch_s_m: float
+    contact_face_width_m: float | None = None
 
     def __post_init__(self):
         for name in ("n_profile", "n_face"):
@@ -54,6 +69,15 @@ class FlankGrid:
         require_positive("grid.face_width_m", self.face_width_m)
         require(0 <= self.pitch_s_m <= self.profile_length_m, "grid.pitch_s_m", self.pitch_s_m,
                 f"within the profile [0, {self.profile_length_m}] m")
+        if self.contact_face_width_m is None:
+            object.__setattr__(self, "contact_face_width_m", self.face_width_m)
+        require_positive("grid.contact_face_width_m", self.contact_face_width_m)
+        require(self.contact_face_width_m <= self.face_width_m * (1 + 1e-12), "grid.contact_face_width_m",
+                self.contact_face_width_m, f"at most the face width {self.face_width_m} m")
+        cols = self.active_cols
+        require(cols.stop > cols.start, "grid.n_face", self.n_face,
+                f"enough columns that at least one centre lies in the contact band of "
+                f"{self.contact_face_width_m * 1e3:.4g} mm")
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -72,6 +96,34 @@ class FlankGrid:
     @property
     def pixel_area_m2(self) -> float:
         return self.ds_m * self.dw_m
+
+    @property
+    def contact_offset_m(self) -> float:
+        """Face position where the contact band starts (m): ``(face_width_m - contact_face_width_m) / 2``."""
+        return (self.face_width_m - self.contact_face_width_m) / 2.0
+
+    @property
+    def active_cols(self) -> slice:
+        """Columns of the active flank: those whose centre lies in the contact band (all with equal widths)."""
+        if self.contact_face_width_m >= self.face_width_m:
+            return slice(0, self.n_face)
+        lo, hi = self.contact_offset_m / self.dw_m, (self.contact_offset_m + self.contact_face_width_m) / self.dw_m
+        c0 = max(0, math.ceil(lo - 0.5))
+        c1 = min(self.n_face, math.floor(hi - 0.5) + 1)
+        return slice(c0, max(c0, c1))
+
+    @property
+    def n_active_cols(self) -> int:
+        return self.active_cols.stop - self.active_cols.start
+
+    @property
+    def n_active_pixels(self) -> int:
+        """Pixels of the active flank (the severity's denominator)."""
+        return self.n_profile * self.n_active_cols
+
+    def severity_of(self, mask: np.ndarray) -> float:
+        """Pitted fraction of the active flank: pitted pixels of the active columns / their pixels."""
+        return np.count_nonzero(np.asarray(mask)[:, self.active_cols]) / self.n_active_pixels
 
     @property
     def s_centres_m(self) -> np.ndarray:
@@ -127,8 +179,8 @@ class PitMap:
         return np.zeros(self.grid.shape, bool) if d is None else d > 0
 
     def severity(self, tooth: int) -> float:
-        """Pitted area / active flank area of one tooth."""
-        return float(self.mask(tooth).mean())
+        """Pitted area / active flank area of one tooth (pits outside the contact band do not count)."""
+        return float(self.grid.severity_of(self.mask(tooth)))
 
     def severities(self) -> dict[int, float]:
         return {t: self.severity(t) for t in self.pitted_teeth}

@@ -287,7 +287,8 @@ class GearPair:
         from datagen.flank import FlankGrid
 
         return FlankGrid(n_profile=n_profile, n_face=n_face, profile_length_m=self.profile_length_m(which),
-                         face_width_m=self._gear(which).face_width_m, pitch_s_m=self.pitch_arc_m(which))
+                         face_width_m=self._gear(which).face_width_m, pitch_s_m=self.pitch_arc_m(which),
+                         contact_face_width_m=self.contact_face_width_m)
 
     # ------------------------------------------------------------------ frequencies and masses
     def shaft_frequency_hz(self, which: str, speed_rpm: float) -> float:

@@ -63,7 +63,7 @@ def normalise_pits(pair, pits) -> tuple[PitMap, ...]:
         require(pm.gear not in seen, "pits.gear", pm.gear, "at most one pit map per gear")
         seen.add(pm.gear)
         expected = pair.flank_grid(pm.gear, pm.grid.n_profile, pm.grid.n_face)
-        for name in ("profile_length_m", "face_width_m"):
+        for name in ("profile_length_m", "face_width_m", "contact_face_width_m"):
             got, want = getattr(pm.grid, name), getattr(expected, name)
             if not math.isclose(got, want, rel_tol=1e-6):
                 raise InputError(f"pits.grid.{name}", got, f"{want:.6g} (the {pm.gear} flank of pair {pair.name})")
@@ -107,32 +107,66 @@ def _section_loss(pair, beam: ToothBeam, which: str, depth: np.ndarray, grid) ->
     return _PitGeometry(depth=depth, dW=dW, dA0=dA0)
 
 
+def slice_pieces(w_slices, dw: float, grids_offsets) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where the slices and the face columns of the pitted grids overlap.
+
+    The slices' edges and every grid's column edges (shifted by its contact offset) cut the contact face into
+    pieces; each lies in one slice and one column of each grid. Returns the slice of each piece, its column on
+    each grid ``(n_grids, pieces)`` and its share of the slice's width (1 when slices and columns coincide).
+    """
+    n = w_slices.size
+    s_edges = np.arange(n + 1) * dw
+    cuts = [s_edges]
+    for grid, offset in grids_offsets:
+        c = np.arange(grid.n_face + 1) * grid.dw_m - offset
+        c = c[(c > 0) & (c < n * dw)]
+        near_slice_edge = np.abs(c / dw - np.rint(c / dw)) < 1e-9   # a slice edge already cuts there
+        cuts.append(c[~near_slice_edge])
+    edges = np.unique(np.concatenate(cuts))
+    mid = 0.5 * (edges[1:] + edges[:-1])
+    sl = np.clip((mid / dw).astype(np.int64), 0, n - 1)
+    cols = np.array([np.clip(((mid + offset) / grid.dw_m).astype(np.int64), 0, grid.n_face - 1)
+                     for grid, offset in grids_offsets]).reshape(len(grids_offsets), mid.size)
+    share = np.diff(edges) / dw
+    share[np.abs(share - 1.0) < 1e-9] = 1.0
+    return sl, cols, share
+
+
 def pit_overrides(pair, pc: PairCompliance, maps, P: int, g_cycle, dw: float, w_slices, pit_model: str) -> dict:
-    """Slice stiffness of every pitted engagement, keyed by (engagement m, slot)."""
+    """Slice stiffness of every pitted engagement, keyed by (engagement m, slot).
+
+    A slice sees every face column it covers: it is cut into pieces where it meets the columns of the pitted
+    grids (:func:`slice_pieces`), each piece takes the slice's contact position and the section loss, contact
+    (no_contact) or weakened spring (weak_spring) of its own column, and the slice's stiffness is the sum of its
+    pieces' ``share * dw / compliance`` (uncoupled, like the slices). With one slice per column, as by default on
+    a spur pair, each slice is one piece and this is the old per-column model; with fewer slices than columns a
+    pit covering half a slice takes half of it (the slice centre used to decide it all: a 20 % ellipse made the
+    pitted tooth's single slice carry nothing).
+    """
     if not any(pm.pitted_teeth for pm in maps):
         return {}
     E, G = pair.material.youngs_modulus_pa, pair.material.shear_modulus_pa
     b_c = pair.contact_face_width_m
+    pitted_maps = [pm for pm in maps if pm.pitted_teeth]
+    offsets = [(pm.grid, (pair._gear(pm.gear).face_width_m - b_c) / 2.0) for pm in pitted_maps]
+    piece_slice, piece_cols, piece_share = slice_pieces(w_slices, dw, offsets)
     per_gear = {}
-    for pm in maps:
-        if not pm.pitted_teeth:
-            continue
+    for i, pm in enumerate(pitted_maps):
         beam = pc.beams[pm.gear]
-        offset = (pair._gear(pm.gear).face_width_m - b_c) / 2.0
-        cols = np.clip(((w_slices + offset) / pm.grid.dw_m).astype(np.int64), 0, pm.grid.n_face - 1)
+        cols = piece_cols[i]
         geo = {}
         for t in pm.pitted_teeth:
             pg = _section_loss(pair, beam, pm.gear, pm.depth_m[t], pm.grid)
-            # the slices whose face column holds a pit somewhere: on the others the section increments are exact
+            # the pieces whose face column holds a pit somewhere: on the others the section increments are exact
             # zeros, so the bending, shear and axial terms add +0.0 and the compliance is the healthy one
             touched = ((pg.dW != 0.0).any(axis=(0, 1)) | (pg.dA0 != 0.0).any(axis=0))[cols]
-            geo[t] = (pg, np.nonzero(touched)[0])
+            geo[t] = (pg, touched)
         per_gear[pm.gear] = (pm, beam, cols, geo)
     z = {"pinion": pair.pinion.teeth, "wheel": pair.wheel.teeth}
     engaged = sorted({m for gear, (pm, *_rest) in per_gear.items() for m in range(P) if m % z[gear] in pm.pitted_teeth})
     # per slot, the same for every engagement: contact, contact positions, healthy compliance; on unstaggered
     # slices (a spur pair's pixel columns), which share their positions, the first slice's positions stand for all
-    # pitted slices (the load point is elementwise, so the same values)
+    # pitted pieces (the load point is elementwise, so the same values)
     slots = {}
     for s in range(g_cycle.shape[1]):
         g = g_cycle[:, s, :]
@@ -141,32 +175,44 @@ def pit_overrides(pair, pc: PairCompliance, maps, P: int, g_cycle, dw: float, w_
             g0 = np.where(contact, g, pair.contact_start_m)
             slots[s] = (contact, g0, pc(g0), g0[:, :1] if bool(np.all(g0 == g0[:, :1])) else None)
     out = {}
+    n_slices = w_slices.size
     for m in engaged:
+        touched = np.zeros(piece_slice.size, bool)
+        for gear, (pm, beam, cols, geo) in per_gear.items():
+            if m % z[gear] in geo:
+                touched |= geo[m % z[gear]][1]
+        sel = np.nonzero(touched)[0]
+        if sel.size == 0:
+            continue
+        psl, share = piece_slice[sel], piece_share[sel]
+        intact_share = 1.0 - np.bincount(psl, weights=share, minlength=n_slices)
+        intact_share[np.abs(intact_share) < 1e-9] = 0.0
         for s, (contact, g0, comp_healthy, g_pit) in slots.items():
-            comp = comp_healthy.copy()
-            pitted_here = np.zeros(contact.shape, bool)
+            comp = comp_healthy[:, psl]
+            pitted_here = np.zeros(comp.shape, bool)
             for gear, (pm, beam, cols, geo) in per_gear.items():
                 tooth = m % z[gear]
                 if tooth not in geo:
                     continue
-                pg, sel = geo[tooth]
-                if sel.size == 0:
-                    continue
+                pg, _ = geo[tooth]
                 t_sap, _ = pair.active_roll_range_rad(gear)
-                roll = pair.roll_angle_rad(gear, g0[:, sel] if g_pit is None else g_pit)
+                roll = pair.roll_angle_rad(gear, g0[:, psl] if g_pit is None else g_pit)
                 s_arc = beam.base_radius_m * (roll**2 - t_sap**2) / 2.0
                 rows = np.clip((s_arc / pm.grid.ds_m).astype(np.int64), 0, pm.grid.n_profile - 1)
                 rows, colg = np.broadcast_arrays(rows, cols[sel][None, :])
-                pitted_here[:, sel] |= pg.depth[rows, colg] > 0
+                pitted_here |= pg.depth[rows, colg] > 0
                 a1, Y, h = beam.load_point(roll)
                 W = pg.dW[:, rows, colg]
                 b, sh, ax = beam_compliance(a1, Y, h, W, pg.dA0[rows, colg], E, G)
-                comp[:, sel] = comp[:, sel] + b + sh + ax
+                comp = comp + b + sh + ax
+            in_contact = contact[:, psl]
             if pit_model == "no_contact":
-                k = np.where(contact & ~pitted_here, dw / comp, 0.0)
+                k_piece = np.where(in_contact & ~pitted_here, dw / comp, 0.0)
             else:
                 comp = np.where(pitted_here, comp + pc.c_hertz * (1.0 / WEAK_SPRING_RATIO - 1.0), comp)
-                k = np.where(contact, dw / comp, 0.0)
+                k_piece = np.where(in_contact, dw / comp, 0.0)
+            k = np.where(contact, dw / comp_healthy, 0.0) * intact_share[None, :]
+            np.add.at(k, (slice(None), psl), share[None, :] * k_piece)
             out[(m, s)] = k
     return out
 

@@ -17,7 +17,8 @@ NPZ (:func:`save_npz`, :func:`load_npz`): a compressed archive with the grid
 fields, the gear, the tooth indices and the depth arrays (m) in float64, so a
 pit map round-trips exactly. Keys: ``format`` (``"gearpit.pitmap/1"``),
 ``n_profile``, ``n_face``, ``profile_length_m``, ``face_width_m``,
-``pitch_s_m``, ``gear``, ``teeth`` (k,), ``depth_m`` (k, n_profile, n_face).
+``pitch_s_m``, ``contact_face_width_m`` (the active band; absent in older files,
+read as the whole face), ``gear``, ``teeth`` (k,), ``depth_m`` (k, n_profile, n_face).
 
 Every write is atomic (:func:`gearpit.atomic.atomic_path`).
 """
@@ -144,6 +145,7 @@ def save_npz(pit_map: PitMap, path: str | Path) -> Path:
             np.savez_compressed(fh, format=np.array(NPZ_FORMAT), n_profile=np.int64(g.n_profile),
                                 n_face=np.int64(g.n_face), profile_length_m=np.float64(g.profile_length_m),
                                 face_width_m=np.float64(g.face_width_m), pitch_s_m=np.float64(g.pitch_s_m),
+                                contact_face_width_m=np.float64(g.contact_face_width_m),
                                 gear=np.array(pit_map.gear), teeth=np.asarray(teeth, dtype=np.int64),
                                 depth_m=stack.astype(np.float64))
     return target
@@ -164,7 +166,9 @@ def load_npz(path: str | Path) -> PitMap:
     require(str(data["format"]) == NPZ_FORMAT, "npz.format", str(data["format"]), NPZ_FORMAT)
     grid = FlankGrid(n_profile=int(data["n_profile"]), n_face=int(data["n_face"]),
                      profile_length_m=float(data["profile_length_m"]), face_width_m=float(data["face_width_m"]),
-                     pitch_s_m=float(data["pitch_s_m"]))
+                     pitch_s_m=float(data["pitch_s_m"]),
+                     contact_face_width_m=float(data["contact_face_width_m"]) if "contact_face_width_m" in data
+                     else None)
     teeth, depth = data["teeth"], data["depth_m"]
     expected = (teeth.size,) + grid.shape
     if depth.shape != expected:

@@ -4,7 +4,11 @@ Every position and size is in metres on the flank: ``s`` along the profile from
 the start of the active profile, ``w`` across the face from one edge (see
 :class:`datagen.flank.FlankGrid`). A pixel belongs to a pit when its centre lies
 inside the pit outline, so the pit footprint is a pixel set and the severity
-(pitted area / flank area) is the fraction of pitted pixels.
+(pitted area / active flank area) is the fraction of pitted pixels of the
+active band (:attr:`FlankGrid.active_cols`). The pits drawn here to a severity
+(:func:`sized_pit`, :func:`cluster`) lie on that band: on the wider gear of a
+pair with unequal face widths they never reach the strips that make no
+contact. :func:`ellipse` and :func:`rectangle` draw where they are told.
 
 Depth profiles (one vocabulary, :data:`DEPTH_PROFILES`):
 
@@ -72,8 +76,8 @@ def require_depth(field: str, value, unit: str = "m") -> None:
 
 
 def default_tolerance(grid: FlankGrid) -> float:
-    """Allowed |achieved - target| severity: ``max(0.002, 4 / pixels)``."""
-    return max(0.002, 4.0 / (grid.n_profile * grid.n_face))
+    """Allowed |achieved - target| severity: ``max(0.002, 4 / pixels)`` (pixels of the active flank)."""
+    return max(0.002, 4.0 / grid.n_active_pixels)
 
 
 # ---------------------------------------------------------------- single pits
@@ -175,20 +179,33 @@ def rectangle(grid: FlankGrid, *, centre_s_m: float, centre_w_m: float, axis_s_m
 def max_severity(grid: FlankGrid, shape: str, aspect_w_to_s: float | None = None) -> float:
     """Largest severity ``make_pit_map`` can give one tooth with this shape.
 
-    An ellipse or rectangle must fit whole on the flank (its centre moves off
-    the pitch line towards mid-profile when needed); a cluster stops at
-    :data:`CLUSTER_MAX_SEVERITY`.
+    An ellipse or rectangle must fit whole on the active flank (its centre
+    moves off the pitch line towards mid-profile when needed); a cluster stops
+    at :data:`CLUSTER_MAX_SEVERITY`.
     """
     if shape == "cluster":
         return CLUSTER_MAX_SEVERITY
     aspect = _aspect(grid, aspect_w_to_s)
-    axis_s = min(grid.profile_length_m, grid.face_width_m / aspect)
+    axis_s = min(grid.profile_length_m, _band_width(grid) / aspect)
     area = axis_s * axis_s * aspect * (math.pi / 4 if shape == "ellipse" else 1.0)
-    return min(1.0, area / (grid.profile_length_m * grid.face_width_m))
+    return min(1.0, area / (grid.profile_length_m * _band_width(grid)))
+
+
+def _band(grid: FlankGrid) -> tuple[float, float]:
+    """Face positions (m) where the active columns start and end: the contact band at pixel resolution."""
+    cols = grid.active_cols
+    return (0.0 if cols.start == 0 else cols.start * grid.dw_m,
+            grid.face_width_m if cols.stop == grid.n_face else cols.stop * grid.dw_m)
+
+
+def _band_width(grid: FlankGrid) -> float:
+    """Width of the active columns (m)."""
+    w_lo, w_hi = _band(grid)
+    return w_hi - w_lo
 
 
 def _aspect(grid: FlankGrid, aspect_w_to_s: float | None) -> float:
-    return grid.face_width_m / grid.profile_length_m if aspect_w_to_s is None else float(aspect_w_to_s)
+    return _band_width(grid) / grid.profile_length_m if aspect_w_to_s is None else float(aspect_w_to_s)
 
 
 def sized_pit(grid: FlankGrid, *, shape: str, severity: float, depth_m: float = DEFAULT_DEPTH_M,
@@ -196,8 +213,8 @@ def sized_pit(grid: FlankGrid, *, shape: str, severity: float, depth_m: float = 
     """One ellipse or rectangle near the pitch line covering ``severity`` of the flank.
 
     The pit is axis-aligned with ``axis_w_m / axis_s_m = aspect_w_to_s``
-    (default: the flank's own proportions ``face_width_m / profile_length_m``),
-    centred at mid-face and on the pitch line ``grid.pitch_s_m``, moved along
+    (default: the active flank's proportions, contact band width over
+    ``profile_length_m``), centred on the contact band and on the pitch line ``grid.pitch_s_m``, moved along
     the profile just enough to stay whole on the flank. An ellipse's scale is
     solved by bisection on its pixel count; a rectangle is a block of whole
     pixels whose row count follows the aspect and whose column count then
@@ -224,7 +241,7 @@ def sized_pit(grid: FlankGrid, *, shape: str, severity: float, depth_m: float = 
     out = np.zeros(grid.shape)
     if severity == 0:
         return out
-    n_pix = grid.n_profile * grid.n_face
+    n_pix = grid.n_active_pixels
     target = max(1, round(severity * n_pix))
     aspect = _aspect(grid, aspect_w_to_s)
     if shape == "rectangle":
@@ -242,24 +259,39 @@ def _centre_s(grid: FlankGrid, axis_s: float) -> float:
 
 
 def _sized_ellipse(grid: FlankGrid, target: int, aspect: float):
-    fit_s = min(grid.profile_length_m, grid.face_width_m / aspect)  # axis_s of the largest whole ellipse
+    fit_s = min(grid.profile_length_m, _band_width(grid) / aspect)  # axis_s of the largest whole ellipse
+    w_lo, w_hi = _band(grid)
+    centre_w = grid.face_width_m / 2 if w_lo == 0.0 else (w_lo + w_hi) / 2
 
-    def place(k: float):
+    def place(k: float, shift_s: float, shift_w: float):
         axis_s = k * fit_s
-        rows, cols, r = _radius(grid, "ellipse", _centre_s(grid, axis_s), grid.face_width_m / 2,
+        rows, cols, r = _radius(grid, "ellipse", _centre_s(grid, axis_s) + shift_s, centre_w + shift_w,
                                 axis_s / 2, axis_s * aspect / 2, 0.0)
         return rows, cols, r, int(np.count_nonzero(r <= 1.0))
 
-    lo, hi = 0.0, 1.0 + 1e-9
-    best = place(hi)
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        cand = place(mid)
+    def bisect(shift_s: float, shift_w: float):
+        lo, hi = 0.0, 1.0 + 1e-9
+        best = place(hi, shift_s, shift_w)
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            cand = place(mid, shift_s, shift_w)
+            if abs(cand[3] - target) < abs(best[3] - target):
+                best = cand
+            if cand[3] == target:
+                break
+            lo, hi = (mid, hi) if cand[3] < target else (lo, mid)
+        return best
+
+    # a centre on a pixel corner or edge (even row or column counts) grows the ellipse in pairs or fours of
+    # pixels, so an odd target (a single pixel) may be missed or come back empty: then the centre also tries the
+    # nearest pixel centres (half a pixel off) and the count closest to the target wins (the first on a tie)
+    best = bisect(0.0, 0.0)
+    for shift in ((0.0, grid.dw_m / 2), (grid.ds_m / 2, 0.0), (grid.ds_m / 2, grid.dw_m / 2)):
+        if best[3] == target:
+            break
+        cand = bisect(*shift)
         if abs(cand[3] - target) < abs(best[3] - target):
             best = cand
-        if cand[3] == target:
-            break
-        lo, hi = (mid, hi) if cand[3] < target else (lo, mid)
     return best[:3]
 
 
@@ -268,13 +300,13 @@ def _pixel_block(grid: FlankGrid, target: int, aspect: float):
     best = None
     for n_r in {math.floor(n_rows0), math.ceil(n_rows0), math.ceil(target / grid.n_face)}:
         n_r = min(max(n_r, 1), grid.n_profile)
-        n_c = min(max(round(target / n_r), 1), grid.n_face)
+        n_c = min(max(round(target / n_r), 1), grid.n_active_cols)
         key = (abs(n_r * n_c - target), abs(n_r - n_rows0))
         if best is None or key < best[0]:
             best = (key, n_r, n_c)
     _, n_r, n_c = best
     r0 = min(max(round(grid.pitch_s_m / grid.ds_m - n_r / 2), 0), grid.n_profile - n_r)
-    c0 = (grid.n_face - n_c) // 2
+    c0 = grid.active_cols.start + (grid.n_active_cols - n_c) // 2
     return _radius(grid, "rectangle", (r0 + n_r / 2) * grid.ds_m, (c0 + n_c / 2) * grid.dw_m,
                    n_r * grid.ds_m / 2, n_c * grid.dw_m / 2, 0.0)
 
@@ -296,11 +328,12 @@ def cluster(grid: FlankGrid, *, target_severity: float, rng: np.random.Generator
     ``pit_diameter_m * LogNormal(0, 0.4)``, minor/major ratio ``U(0.5, 1)`` and a
     random orientation. While the pitted fraction ``f`` is small, pits nucleate
     afresh at ``s ~ Normal(pitch_s_m, spread_s_m)`` (clipped to the flank) and
-    ``w ~ U(0, face_width_m)``; with probability ``1 - exp(-f /
+    ``w`` uniform across the contact band; with probability ``1 - exp(-f /
     nucleation_scale)`` a pit instead grows from the outline of an earlier one
     (offset along the profile halved, so damage spreads along the pitch line).
     Early damage is therefore many small pits near the pitch line, later damage
-    grows and merges them into fewer, larger craters. Pits are added until the
+    grows and merges them into fewer, larger craters. Pits are clipped to the active flank (the
+    contact band, see :class:`datagen.flank.FlankGrid`) and added until the
     pitted fraction reaches ``target_severity``; the last pit is shrunk
     (bisection on its scale) to land on the target. The pit sequence does not
     depend on the target, so with the same generator state a larger severity
@@ -317,7 +350,7 @@ def cluster(grid: FlankGrid, *, target_severity: float, rng: np.random.Generator
     tolerance : float, optional
         Allowed |achieved - target|; default :func:`default_tolerance`.
     pit_diameter_m : float, optional
-        Median pit size (m); default 10 % of the smaller flank dimension.
+        Median pit size (m); default 10 % of the smaller active flank dimension.
     spread_s_m : float, optional
         Standard deviation of new pit centres about the pitch line (m);
         default 15 % of the profile length.
@@ -338,14 +371,16 @@ def cluster(grid: FlankGrid, *, target_severity: float, rng: np.random.Generator
     require_positive("pits.tolerance", tol)
     require_positive("pits.nucleation_scale", nucleation_scale)
     require(profile in DEPTH_PROFILES, "pits.profile", profile, f"one of: {', '.join(DEPTH_PROFILES)}")
-    size = 0.1 * min(grid.profile_length_m, grid.face_width_m) if pit_diameter_m is None else pit_diameter_m
+    band = grid.active_cols
+    w_lo, w_hi = _band(grid)
+    size = 0.1 * min(grid.profile_length_m, w_hi - w_lo) if pit_diameter_m is None else pit_diameter_m
     spread = 0.15 * grid.profile_length_m if spread_s_m is None else spread_s_m
     require_positive("pits.pit_diameter_m", size)
     require_positive("pits.spread_s_m", spread)
     require(isinstance(rng, np.random.Generator), "pits.rng", type(rng).__name__, "a numpy.random.Generator")
 
     out = np.zeros(grid.shape)
-    n_pix = grid.n_profile * grid.n_face
+    n_pix = grid.n_active_pixels
     target = 0 if target_severity == 0 else max(1, round(target_severity * n_pix))
     count = 0
     centres: list[tuple[float, float, float]] = []  # (s, w, mean semi-axis) of pits that added area
@@ -354,7 +389,12 @@ def cluster(grid: FlankGrid, *, target_severity: float, rng: np.random.Generator
     while count < target:
         if k >= max_pits:
             raise InputError("pits.severity", target_severity,
-                             f"a severity reached with at most {max_pits} pits (got {count / n_pix:.4f})")
+                             f"a severity this {grid.n_profile}x{grid.n_face} grid resolves for pits of "
+                             f"{size * 1e3:.3g} mm on {grid.ds_m * 1e3:.3g} x {grid.dw_m * 1e3:.3g} mm pixels: "
+                             f"growth stalled at {count / n_pix:.4f} after {max_pits} pits (the grid's resolution "
+                             f"limits it, not the cluster limit {CLUSTER_MAX_SEVERITY}); nearest reachable here: "
+                             f"{count / n_pix:.4f} or below, in steps of {1 / n_pix:.4f}; use a finer grid or a "
+                             f"larger pit_diameter_mm")
         if k % _BATCH == 0:
             draw = rng.random((_BATCH, 5))
             normal = rng.standard_normal((_BATCH, 2))
@@ -368,11 +408,15 @@ def cluster(grid: FlankGrid, *, target_severity: float, rng: np.random.Generator
             cs, cw = ps + 0.5 * pr * math.cos(2 * math.pi * phi), pw + pr * math.sin(2 * math.pi * phi)
         else:
             cs = min(max(grid.pitch_s_m + spread * z_s, 0.0), grid.profile_length_m)
-            cw = grid.face_width_m * pick
+            cw = w_lo + (w_hi - w_lo) * pick if w_lo > 0.0 else grid.face_width_m * pick
         cs = min(max(cs, 0.0), grid.profile_length_m)
-        cw = min(max(cw, 0.0), grid.face_width_m)
+        cw = min(max(cw, w_lo), w_hi)
         angle = math.pi * theta
         rows, cols, r = _radius(grid, "ellipse", cs, cw, major / 2, minor / 2, angle)
+        if cols.start < band.start or cols.stop > band.stop:  # clipped to the contact band
+            c0 = max(cols.start, band.start)
+            c1 = max(min(cols.stop, band.stop), c0)
+            r, cols = r[:, c0 - cols.start:c1 - cols.start], slice(c0, c1)
         new = (r <= 1.0) & ~mask[rows, cols]
         gain = int(np.count_nonzero(new))
         if gain == 0:  # wholly inside earlier pits: not a growth front

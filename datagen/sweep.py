@@ -378,11 +378,12 @@ def _check_feasible(sweep: Sweep) -> None:
 
 def _check_rectangle_resolution(grid, b: SeverityBin, tol: float, aspects, where: str) -> None:
     """A rectangle of whole pixels lands within ``tol`` when half its row count is <= tol * pixels."""
-    n_pix = grid.n_profile * grid.n_face
+    n_pix = grid.n_active_pixels        # the active flank (the contact band; every column with equal face widths)
     for a in aspects:
-        a = grid.face_width_m / grid.profile_length_m if a is None else a
+        band = grid.face_width_m if grid.n_active_cols == grid.n_face else grid.n_active_cols * grid.dw_m
+        a = band / grid.profile_length_m if a is None else a
         rows = math.sqrt(b.max_fraction * n_pix * grid.pixel_area_m2 / a) / grid.ds_m
         rows = min(grid.n_profile, math.ceil(rows))
         require(rows / 2 <= tol * n_pix, where, [b.min_fraction, b.max_fraction],
                 f"a flank grid fine enough for rectangles within tolerance {tol:.4g} (need more face pixels "
-                f"than {grid.n_face} or a larger pits.tolerance)")
+                f"than {grid.n_active_cols} in the contact band or a larger pits.tolerance)")
