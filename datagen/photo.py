@@ -97,10 +97,12 @@ def read_gray(image: str | Path | np.ndarray) -> np.ndarray:
     """Grayscale image in [0, 1] (float64) from a file or an array.
 
     Accepts 8- or 16-bit, gray, BGR or BGRA images (alpha ignored), or a 2-D
-    float array already in [0, 1]. An unreadable file raises InputError
-    naming it.
+    float array already in [0, 1]. An unreadable file, or a JPEG cut short
+    (no end-of-image marker in its last 4 kB), raises InputError naming it.
     """
     if isinstance(image, (str, Path)):
+        require(not (Path(image).is_file() and _truncated_jpeg(Path(image))), "image", str(image),
+                "a complete JPEG (this one ends before its end-of-image marker: truncated or corrupt)")
         arr = cv2.imread(str(image), cv2.IMREAD_UNCHANGED)
         if arr is None:
             raise InputError("image", str(image), "a readable image file (PNG, JPEG, TIFF, BMP)")
@@ -121,6 +123,17 @@ def read_gray(image: str | Path | np.ndarray) -> np.ndarray:
     require(bool(np.all(np.isfinite(out))) and out.min() >= 0 and out.max() <= 1, "image.values",
             f"{out.dtype} in [{out.min():g}, {out.max():g}]", "uint8, uint16, or floats in [0, 1]")
     return out
+
+
+def _truncated_jpeg(path: Path) -> bool:
+    """True for a JPEG without its end-of-image marker (FF D9) near the end: OpenCV decodes such a file,
+    filling the missing part with grey, and only prints "Premature end of JPEG file"."""
+    with open(path, "rb") as f:
+        if f.read(2) != b"\xff\xd8":
+            return False
+        f.seek(0, 2)
+        f.seek(max(f.tell() - 4096, 0))
+        return b"\xff\xd9" not in f.read()
 
 
 def flank_crop_box(gray: np.ndarray) -> tuple[int, int, int, int]:

@@ -173,6 +173,19 @@ def test_pit_map_from_file_and_formats(tmp_path):
     np.testing.assert_array_equal(mask_from_image(cv2.cvtColor(photo, cv2.COLOR_GRAY2BGR), GRID), gray)
 
 
+def test_truncated_jpeg_is_refused(tmp_path):
+    """A JPEG cut short (first 5000 bytes) raises InputError naming the file; OpenCV decoded it with the missing
+    rows grey and the old code returned a mask (the auditor's truncated.jpg: severity 0.325, exit 0).
+    The complete file still reads."""
+    photo = render_flank_photo(truth_mask(1), 1, **SETTINGS["mild"])
+    ok, buf = cv2.imencode(".jpg", photo, [cv2.IMWRITE_JPEG_QUALITY, 85])
+    (tmp_path / "full.jpg").write_bytes(buf.tobytes())
+    (tmp_path / "cut.jpg").write_bytes(buf.tobytes()[:5000])
+    assert mask_from_image(tmp_path / "full.jpg", GRID).any()
+    with pytest.raises(InputError, match="cut.jpg"):
+        mask_from_image(tmp_path / "cut.jpg", GRID)
+
+
 def test_bad_input_raises_input_error(tmp_path):
     """Unreadable image names the file; a crop outside the photo and unknown options name their field."""
     (tmp_path / "broken.jpg").write_bytes(b"\x00garbage")
