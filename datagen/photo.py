@@ -12,24 +12,32 @@ discretises the flank into ``m x n`` pixels. The steps here
 2. Gaussian smoothing (``sigma_px``);
 3. gradient operator: Sobel magnitude of the log of the smoothed image (smooth
    lighting barely shows, pit outlines do), thresholded with Otsu's method [2]_
-   (floored at 3 x its median, the noise level); the largest region free of
-   edges is taken as intact flank;
-4. lighting flattening: divide by a background fitted to the intact pixels
-   only -- a quadratic surface (``"polynomial"``, robust to low outliers) or a
-   normalised Gaussian blur (``"blur"``, any smooth lighting) -- so uneven
-   lighting and large pits do not bias each other;
+   (floored at 3 x its median, the noise level); for the whole-flank lighting
+   models the brightest large region free of edges is taken as intact flank;
+4. lighting flattening: divide by a background fitted to the photo with the
+   pits left out. The default (``"rows"``) fits each row (profile height)
+   its own quartic across the face, dropping outliers on both sides (pit
+   floors, lit pit walls) and clipped pixels: a flank's light changes fast
+   along the curved profile (a specular streak along the face, shading towards
+   root and tip) and slowly across the straight face, and pits only cover part
+   of a row. The older whole-flank models, fitted to the brightest edge-free
+   region only -- a quadratic surface (``"polynomial"``) or a normalised
+   Gaussian blur (``"blur"``) -- assume light smooth in both directions: a
+   streak leaves the band beside it darker than their fit, read as pits;
 5. threshold halfway between the intact level and the median pit floor (where
    a blurred step edge crosses, so outlines do not move with the smoothing),
-   never closer than 4 noise sigmas to the intact level (an intact flank gives
-   no pits);
+   never closer than 4 noise sigmas plus :data:`MIN_PIT_CONTRAST` to the
+   intact level (an intact flank gives no pits, also under a lighting gradient
+   and a specular streak: tested);
 6. morphology: opening with a 1-pixel disc, holes filled (bright spots on
    rough pit floors), regions smaller than ``min_area_px`` removed; steps 4-6
    are run twice, the second time with the found pits excluded from the
    lighting fit;
 7. resampling to the flank grid: area average of the mask, pitted where >= 0.5.
 
-Limits: the intact flank must be the brightest large edge-free region, so
-flanks pitted over more than about half their area, or pits whose outline is
+Limits: the intact flank must be most of each row (``"rows"``) or the
+brightest large edge-free region (the others), so flanks pitted over more
+than about half their area, or pits whose outline is
 broken by a rough floor, can come back empty (tested: IoU >= 0.8 for pitted
 fractions 5-45 %, see tests/test_photo.py). Depth cannot be read from one
 photo; :func:`pit_map_from_image` gives every pit one depth.
@@ -56,7 +64,7 @@ from datagen.flank import FlankGrid, PitMap
 from datagen.pitshapes import DEFAULT_DEPTH_M, require_depth
 from gearpit.errors import InputError, require, require_positive
 
-FLATTEN_METHODS = ("polynomial", "blur", "none")
+FLATTEN_METHODS = ("rows", "polynomial", "blur", "none")
 
 
 @dataclass(frozen=True)
@@ -89,10 +97,12 @@ def read_gray(image: str | Path | np.ndarray) -> np.ndarray:
     """Grayscale image in [0, 1] (float64) from a file or an array.
 
     Accepts 8- or 16-bit, gray, BGR or BGRA images (alpha ignored), or a 2-D
-    float array already in [0, 1]. An unreadable file raises InputError
-    naming it.
+    float array already in [0, 1]. An unreadable file, or a JPEG cut short
+    (no end-of-image marker in its last 4 kB), raises InputError naming it.
     """
     if isinstance(image, (str, Path)):
+        require(not (Path(image).is_file() and _truncated_jpeg(Path(image))), "image", str(image),
+                "a complete JPEG (this one ends before its end-of-image marker: truncated or corrupt)")
         arr = cv2.imread(str(image), cv2.IMREAD_UNCHANGED)
         if arr is None:
             raise InputError("image", str(image), "a readable image file (PNG, JPEG, TIFF, BMP)")
@@ -113,6 +123,17 @@ def read_gray(image: str | Path | np.ndarray) -> np.ndarray:
     require(bool(np.all(np.isfinite(out))) and out.min() >= 0 and out.max() <= 1, "image.values",
             f"{out.dtype} in [{out.min():g}, {out.max():g}]", "uint8, uint16, or floats in [0, 1]")
     return out
+
+
+def _truncated_jpeg(path: Path) -> bool:
+    """True for a JPEG without its end-of-image marker (FF D9) near the end: OpenCV decodes such a file,
+    filling the missing part with grey, and only prints "Premature end of JPEG file"."""
+    with open(path, "rb") as f:
+        if f.read(2) != b"\xff\xd8":
+            return False
+        f.seek(0, 2)
+        f.seek(max(f.tell() - 4096, 0))
+        return b"\xff\xd9" not in f.read()
 
 
 def flank_crop_box(gray: np.ndarray) -> tuple[int, int, int, int]:
@@ -146,6 +167,67 @@ def _crop(gray: np.ndarray, crop) -> tuple[np.ndarray, tuple[int, int, int, int]
                 f"(top, bottom, left, right) with 0 <= top < bottom <= {gray.shape[0]}, "
                 f"0 <= left < right <= {gray.shape[1]}, at least 8 x 8 pixels")
     return gray[box[0]:box[1], box[2]:box[3]], box
+
+
+#: least relative darkening (of the lighting estimate) read as a pit: what is left of the lighting after the
+#: per-row fit (a few %, at a streak's ends) is not a pit; the pit floors of the tests and the audit photos
+#: are 40-65 % darker than the flank
+MIN_PIT_CONTRAST = 0.05
+
+#: gray level at and above which a pixel is taken as clipped (a saturated highlight)
+_SATURATED = 0.995
+
+#: degree of the per-row lighting polynomial across the face (a streak's fall-off along the face is not quadratic)
+_ROW_DEGREE = 4
+
+
+def _background_rows(gray: np.ndarray, support: np.ndarray, n_iter: int = 10) -> np.ndarray:
+    """Lighting as one robust quadratic across the face per row (per profile height).
+
+    A flank's lighting changes quickly along the curved profile (a specular
+    streak along the face at one height, shading towards root and tip) and
+    slowly across the straight face, so every row gets its own quadratic in
+    the face coordinate, fitted to its intact pixels with outliers on both
+    sides (pit floors, lit pit walls) dropped beyond 2.5 sigma. Pits only
+    cover part of a row, so they cannot pull a row's fit down; rows with
+    fewer than 10 % intact pixels take the coefficients of the nearest rows
+    that have them. Unlike one surface for the whole flank, a streak (a
+    bright band spanning the face) does not leave the rows beside it darker
+    than their fit.
+    """
+    h, w = gray.shape
+    x = (np.arange(w) + 0.5) / w - 0.5
+    basis = np.stack([x ** k for k in range(_ROW_DEGREE + 1)])   # (n, w)
+    gram_terms = basis[:, None, :] * basis[None, :, :]       # (3, 3, w)
+    base = support if np.count_nonzero(support) >= 100 else np.ones(gray.shape, bool)
+
+    def fit(keep):
+        wts = keep.astype(np.float64)
+        gram = np.einsum("rw,ijw->rij", wts, gram_terms) + 1e-9 * np.eye(len(basis))
+        rhs = np.einsum("rw,iw->ri", wts * gray, basis)
+        return np.linalg.solve(gram, rhs[..., None])[..., 0], wts.sum(axis=1)
+
+    coef, count = fit(base)
+    keep = base & (gray >= coef @ basis)   # start from the upper half: pits only pull the fit down
+    for _ in range(n_iter):
+        coef, count = fit(keep)
+        resid = gray - coef @ basis
+        r_keep = resid[keep]
+        sigma = 1.4826 * float(np.median(np.abs(r_keep - np.median(r_keep)))) + 1e-9 if r_keep.size else 1.0
+        new_keep = base & (np.abs(resid) < 2.5 * sigma)
+        if np.array_equal(new_keep, keep):
+            break
+        keep = new_keep
+    good = count >= max(0.1 * w, 6)
+    if not good.any():
+        return np.full(gray.shape, max(float(np.median(gray)), 1e-3))
+    if not good.all():
+        rows = np.arange(h)
+        coef = np.stack([np.interp(rows, rows[good], coef[good, i]) for i in range(len(basis))], axis=1)
+    background = coef @ basis
+    clipped = gray >= _SATURATED    # left out of the fit, where the polynomial may run away: lit, not pitted
+    background[clipped] = gray[clipped]
+    return np.maximum(background, 1e-3)
 
 
 def _background_polynomial(gray: np.ndarray, support: np.ndarray, n_iter: int = 8) -> np.ndarray:
@@ -199,7 +281,7 @@ def _disc(radius: int) -> np.ndarray:
 
 
 def extraction_steps(image: str | Path | np.ndarray, *, crop=None, rot90: int = 0, sigma_px: float = 2.0,
-                     flatten: str = "polynomial", background_px: float | None = None,
+                     flatten: str = "rows", background_px: float | None = None,
                      min_area_px: int | None = None) -> ExtractionSteps:
     """Run the extraction at photo resolution and keep every intermediate image.
 
@@ -222,13 +304,26 @@ def extraction_steps(image: str | Path | np.ndarray, *, crop=None, rot90: int = 
     gradient = np.hypot(cv2.Sobel(log_img, cv2.CV_64F, 1, 0, ksize=3),
                         cv2.Sobel(log_img, cv2.CV_64F, 0, 1, ksize=3)) / 8.0
     edges = gradient > max(_otsu(gradient), 3 * float(np.median(gradient)))
-    support = _intact_region(~edges, smooth_raw)
+    # the row fit rejects pits itself and takes every pixel (a streak's steep sides are calm nowhere along a
+    # row); the whole-flank fits take the brightest calm region
+    if flatten == "rows":   # clipped highlights do not show the lighting
+        calm = gray < _SATURATED
+        # rows crossing the brightest edge-free region start from it (a row more than half pitted is not
+        # fitted to its pit floor); the others (a streak's steep sides are edge-free nowhere) from every pixel
+        intact = _intact_region(~edges, smooth_raw) & calm
+        crossing = np.count_nonzero(intact, axis=1) >= 0.25 * gray.shape[1]
+        support = np.where(crossing[:, None], intact, calm)
+    else:
+        calm = ~edges
+        support = _intact_region(calm, smooth_raw)
 
     min_area = min_area_px if min_area_px is not None else int(round(4 * np.pi * sigma_px ** 2))
     bg_px = background_px if background_px is not None else 0.25 * min(gray.shape)
     grow = _disc(int(round(2 * sigma_px)) + 1)
     for _ in range(2):  # lighting from the intact pixels, then again without the pits found
-        if flatten == "polynomial":
+        if flatten == "rows":
+            background = _background_rows(gray, support)
+        elif flatten == "polynomial":
             background = _background_polynomial(gray, support)
         elif flatten == "blur":
             background = _background_blur(gray, support, bg_px)
@@ -236,7 +331,7 @@ def extraction_steps(image: str | Path | np.ndarray, *, crop=None, rot90: int = 
             background = np.full(gray.shape, max(float(np.median(gray[support])), 1e-3))
         smoothed = smooth_raw / background
         dark, pit = _dark_regions(smoothed, support, min_area)
-        support = ~ndimage.binary_dilation(pit, grow) & ~edges
+        support = ~ndimage.binary_dilation(pit, grow) & calm
         if not support.any():
             break
     return ExtractionSteps(gray=gray, background=background, flattened=gray / background, smoothed=smoothed,
@@ -264,7 +359,9 @@ def _dark_regions(smoothed: np.ndarray, support: np.ndarray, min_area: int) -> t
 
     Halfway is where a blurred step edge crosses, so the pit outline does not
     move with the smoothing. The floor level is the median of the clearly dark
-    pixels (below ``level - 5 noise``); with none, there are no pits.
+    pixels (at least :data:`MIN_PIT_CONTRAST` below the intact level, less 5
+    noise sigmas); with none, there are no pits. The threshold is never above
+    ``level (1 - MIN_PIT_CONTRAST) - 4 noise``.
     """
     ref = smoothed[support] if support.any() else smoothed.ravel()
     level = float(np.median(ref))
@@ -276,7 +373,7 @@ def _dark_regions(smoothed: np.ndarray, support: np.ndarray, min_area: int) -> t
         empty = np.zeros(smoothed.shape, bool)
         return empty, empty
     floor = float(np.median(smoothed[clearly]))
-    dark = smoothed < min(0.5 * (level + floor), level - 4 * noise)
+    dark = smoothed < min(0.5 * (level + floor), level * (1 - MIN_PIT_CONTRAST) - 4 * noise)
     pit = ndimage.binary_opening(dark, _disc(1))
     pit = ndimage.binary_fill_holes(pit)
     return dark, _drop_small(pit, min_area)
@@ -310,7 +407,7 @@ def resample_mask(mask: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
 
 
 def mask_from_image(image: str | Path | np.ndarray, grid: FlankGrid, *, crop=None, rot90: int = 0,
-                    sigma_px: float = 2.0, flatten: str = "polynomial", background_px: float | None = None,
+                    sigma_px: float = 2.0, flatten: str = "rows", background_px: float | None = None,
                     min_area_px: int | None = None) -> np.ndarray:
     """Boolean pit mask on ``grid`` from a photo of one flank.
 
@@ -329,9 +426,11 @@ def mask_from_image(image: str | Path | np.ndarray, grid: FlankGrid, *, crop=Non
         across the face.
     sigma_px : float
         Gaussian smoothing (photo pixels).
-    flatten : {"polynomial", "blur", "none"}
-        Lighting correction fitted to the intact pixels, see the module
-        docstring; ``"none"`` only for evenly lit photos.
+    flatten : {"rows", "polynomial", "blur", "none"}
+        Lighting correction, see the module docstring: ``"rows"`` (default)
+        a robust quartic across the face per row; ``"polynomial"`` and
+        ``"blur"`` whole-flank fits that read a specular streak's surroundings
+        as pits; ``"none"`` only for evenly lit photos.
     background_px : float, optional
         Standard deviation (photo pixels) of the ``"blur"`` background,
         default a quarter of the smaller side; larger than the pits.
@@ -349,7 +448,7 @@ def mask_from_image(image: str | Path | np.ndarray, grid: FlankGrid, *, crop=Non
 
 def pit_map_from_image(path: str | Path | np.ndarray, grid: FlankGrid, *, gear: str = "pinion", tooth: int = 0,
                        depth_m: float = DEFAULT_DEPTH_M, crop=None, rot90: int = 0, sigma_px: float = 2.0,
-                       flatten: str = "polynomial", background_px: float | None = None,
+                       flatten: str = "rows", background_px: float | None = None,
                        min_area_px: int | None = None) -> PitMap:
     """Pit map with one tooth whose pits are extracted from a photo, at uniform depth ``depth_m`` (m).
 
