@@ -151,26 +151,78 @@ def save_npz(pit_map: PitMap, path: str | Path) -> Path:
     return target
 
 
+def _npz_scalar(data: dict, key: str, name: str, kind: str):
+    """One scalar field of a pit-map NPZ as ``int``, ``float`` or ``str``; anything else raises InputError."""
+    v = data[key]
+    allowed = {"int": "a single integer (0-d array)", "float": "a single number (0-d array)",
+               "str": "a single string (0-d array)"}[kind]
+    if v.ndim != 0:
+        raise InputError(f"npz.{key}", f"an array of shape {v.shape} in {name}", allowed)
+    if kind == "str":
+        require(v.dtype.kind == "U", f"npz.{key}", v.item(), allowed)
+        return str(v)
+    require(v.dtype.kind in "iuf" and bool(np.isfinite(v)), f"npz.{key}", v.item(), allowed)
+    if kind == "int":
+        require(float(v) == int(v), f"npz.{key}", v.item(), allowed)
+        return int(v)
+    return float(v)
+
+
+def _npz_teeth(teeth: np.ndarray) -> list[int]:
+    """Tooth indices of a pit-map NPZ: integers >= 0, each once (a float or repeated tooth is refused by name)."""
+    require(teeth.ndim == 1 and (teeth.dtype.kind in "iuf" or teeth.size == 0), "npz.teeth",
+            f"an array of shape {teeth.shape}, dtype {teeth.dtype}", "a 1-D array of integer tooth indices")
+    out = []
+    for t in teeth.tolist():
+        require(float(t) == int(t) and t >= 0, "npz.teeth", t, "integer tooth indices >= 0 (tooth "
+                f"{t!r} is not one; the archive would otherwise put its depths on tooth {int(t)})")
+        require(int(t) not in out, "npz.teeth", int(t),
+                f"each tooth once (tooth {int(t)} appears {teeth.tolist().count(t)} times; its depth maps would be "
+                f"merged)")
+        out.append(int(t))
+    return out
+
+
 def load_npz(path: str | Path) -> PitMap:
-    """Read a pit map written by :func:`save_npz`; a missing key or wrong shape raises InputError."""
+    """Read a pit map written by :func:`save_npz`.
+
+    Raises
+    ------
+    InputError
+        Not a pit-map NPZ archive (a ``.npy`` file, a truncated or pickled one), a missing key, a non-scalar grid
+        field, a non-integer or repeated tooth, a wrong depth shape, or a tooth whose deepest pixel lies outside
+        :data:`datagen.pitshapes.DEPTH_RANGE_M` (1 um .. 5 mm; e.g. depths written in mm as if in m).
+    """
     p = Path(path)
     try:
-        with np.load(p, allow_pickle=False) as z:
+        z = np.load(p, allow_pickle=False)
+        if not isinstance(z, np.lib.npyio.NpzFile):
+            raise InputError("npz", str(p), f"a gearpit pit-map NPZ archive (this is a .npy file holding one bare "
+                             f"{type(z).__name__} of shape {getattr(z, 'shape', ())}, without the grid, gear and "
+                             f"teeth; write pit maps with datagen.pitio.save_npz)")
+        with z:
             data = {k: z[k] for k in z.files}
     except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+        if isinstance(exc, InputError):
+            raise
         raise InputError("npz", str(p), f"a readable gearpit pit-map NPZ ({exc})") from None
     keys = ("format", "n_profile", "n_face", "profile_length_m", "face_width_m", "pitch_s_m", "gear", "teeth",
             "depth_m")
     for key in keys:
         require(key in data, f"npz.{key}", None, f"present in {p.name} (keys: {', '.join(keys)})")
-    require(str(data["format"]) == NPZ_FORMAT, "npz.format", str(data["format"]), NPZ_FORMAT)
-    grid = FlankGrid(n_profile=int(data["n_profile"]), n_face=int(data["n_face"]),
-                     profile_length_m=float(data["profile_length_m"]), face_width_m=float(data["face_width_m"]),
-                     pitch_s_m=float(data["pitch_s_m"]),
-                     contact_face_width_m=float(data["contact_face_width_m"]) if "contact_face_width_m" in data
-                     else None)
-    teeth, depth = data["teeth"], data["depth_m"]
-    expected = (teeth.size,) + grid.shape
+    fmt = _npz_scalar(data, "format", p.name, "str")
+    require(fmt == NPZ_FORMAT, "npz.format", fmt, NPZ_FORMAT)
+    num = {k: _npz_scalar(data, k, p.name, "int") for k in ("n_profile", "n_face")}
+    num.update({k: _npz_scalar(data, k, p.name, "float")
+                for k in ("profile_length_m", "face_width_m", "pitch_s_m", "contact_face_width_m") if k in data})
+    grid = FlankGrid(**num)
+    gear = _npz_scalar(data, "gear", p.name, "str")
+    teeth, depth = _npz_teeth(data["teeth"]), data["depth_m"]
+    expected = (len(teeth),) + grid.shape
     if depth.shape != expected:
         raise InputError("npz.depth_m.shape", depth.shape, f"{expected} (teeth, profile rows, face columns)")
-    return PitMap(grid=grid, depth_m={int(t): depth[i] for i, t in enumerate(teeth)}, gear=str(data["gear"]))
+    for i, t in enumerate(teeth):
+        deepest = float(np.max(depth[i], initial=0.0))
+        if deepest > 0:     # the same range every other entry point enforces (PNGs, masks, photos, pit tables)
+            require_depth(f"npz.depth_m (tooth {t}, deepest pixel)", deepest)
+    return PitMap(grid=grid, depth_m={t: depth[i] for i, t in enumerate(teeth)}, gear=gear)
