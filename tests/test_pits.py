@@ -253,8 +253,9 @@ def test_png_round_trip_to_one_micrometre(tmp_path):
     """16-bit PNG in um: depths round-trip within 0.5 um (stated: 1 um), masks exactly; files only, no leftovers."""
     pm = _bowl_map(FINE)
     paths = save_pit_pngs(pm, tmp_path / "pits")
-    assert sorted(p.name for p in (tmp_path / "pits").iterdir()) == ["tooth_001.png", "tooth_004.png"] == \
-        [p.name for p in paths]
+    assert sorted(p.name for p in (tmp_path / "pits").iterdir()) == ["pitmap.json", "tooth_001.png",
+                                                                     "tooth_004.png"]
+    assert [p.name for p in paths] == ["tooth_001.png", "tooth_004.png"]
     back = load_pit_pngs(tmp_path / "pits", FINE, gear="wheel")
     assert sorted(back.depth_m) == [1, 4]
     for t in (1, 4):
@@ -355,3 +356,37 @@ def test_npz_non_scalar_field_and_npy_file_raise_input_error(tmp_path):
     with pytest.raises(InputError) as info:
         load_npz(tmp_path / "plain.npy")
     assert info.value.field == "npz" and "plain.npy" in info.value.value and ".npy file" in info.value.allowed
+
+
+def test_png_directory_keeps_gear_and_grid(tmp_path):
+    """A PNG directory's sidecar brings a wheel map back as wheel (pinion before) and refuses another grid of the
+    same shape (another pair's flank: loaded silently before) or another gear or pair, naming the field."""
+    from datagen.geometry import preset
+    spur, helical = preset("spur-gds"), preset("helical-dct")
+    grid = spur.flank_grid("wheel", 24, 100)
+    pm = make_pit_map(grid, shape="ellipse", severity={0: 0.2}, seed=1, gear="wheel")
+    save_pit_pngs(pm, tmp_path / "w", pair_name=spur.name)
+    back = load_pit_pngs(tmp_path / "w", grid)
+    assert back.gear == "wheel" and back.pitted_teeth == [0]
+    assert load_pit_pngs(tmp_path / "w", grid, gear="wheel", pair_name=spur.name).gear == "wheel"
+    other = helical.flank_grid("wheel", 24, 100)
+    assert other.shape == grid.shape and other != grid
+    with pytest.raises(InputError) as info:
+        load_pit_pngs(tmp_path / "w", other)
+    assert info.value.field.startswith("pitmap.json.") and "another grid" in info.value.allowed
+    with pytest.raises(InputError) as info:
+        load_pit_pngs(tmp_path / "w", grid, gear="pinion")
+    assert info.value.field == "pitmap.json.gear" and info.value.value == "wheel"
+    with pytest.raises(InputError) as info:
+        load_pit_pngs(tmp_path / "w", grid, pair_name=helical.name)
+    assert info.value.field == "pitmap.json.pair" and info.value.value == spur.name
+
+
+def test_png_directory_without_sidecar_reads_with_warning(tmp_path):
+    """An old (or hand-painted) directory without the sidecar is read as before, with a warning."""
+    pm = _bowl_map(COARSE)
+    save_pit_pngs(pm, tmp_path / "old")
+    (tmp_path / "old" / "pitmap.json").unlink()
+    with pytest.warns(UserWarning, match="gear and grid .* could not be checked"):
+        back = load_pit_pngs(tmp_path / "old", COARSE, gear="wheel")
+    assert back.gear == "wheel" and sorted(back.depth_m) == [1, 4]
