@@ -253,8 +253,9 @@ def test_png_round_trip_to_one_micrometre(tmp_path):
     """16-bit PNG in um: depths round-trip within 0.5 um (stated: 1 um), masks exactly; files only, no leftovers."""
     pm = _bowl_map(FINE)
     paths = save_pit_pngs(pm, tmp_path / "pits")
-    assert sorted(p.name for p in (tmp_path / "pits").iterdir()) == ["tooth_001.png", "tooth_004.png"] == \
-        [p.name for p in paths]
+    assert sorted(p.name for p in (tmp_path / "pits").iterdir()) == ["pitmap.json", "tooth_001.png",
+                                                                     "tooth_004.png"]
+    assert [p.name for p in paths] == ["tooth_001.png", "tooth_004.png"]
     back = load_pit_pngs(tmp_path / "pits", FINE, gear="wheel")
     assert sorted(back.depth_m) == [1, 4]
     for t in (1, 4):
@@ -313,3 +314,79 @@ def test_npz_round_trip_exact(tmp_path):
     with pytest.raises(InputError) as info:
         load_npz(tmp_path / "cut.npz")
     assert info.value.field == "npz.depth_m.shape" and "(2, 24, 100)" in info.value.allowed
+
+
+def _npz_with(tmp_path, name, **changes):
+    """A copy of a valid pit-map NPZ (COARSE, wheel teeth 1 and 4) with some arrays replaced."""
+    save_npz(_bowl_map(COARSE), tmp_path / "ok.npz")
+    with np.load(tmp_path / "ok.npz") as z:
+        data = {k: z[k] for k in z.files}
+    data.update(changes)
+    np.savez(tmp_path / name, **data)
+    return tmp_path / name
+
+
+@pytest.mark.parametrize("factor", [1e3, 4e4])  # depths written in mm as if m (0.2 'm'); 10 m deep pits
+def test_npz_depth_outside_range_refused(tmp_path, factor):
+    """load_npz enforces DEPTH_RANGE_M (1 um .. 5 mm) on each tooth's deepest pixel, as PNGs, masks and pit
+    tables do; before, a 1000x unit slip or 10 m deep pits reached the stiffness code."""
+    pm = _bowl_map(COARSE)
+    stack = np.stack([pm.depth_m[1], pm.depth_m[4]]) * factor
+    with pytest.raises(InputError) as info:
+        load_npz(_npz_with(tmp_path, "deep.npz", depth_m=stack))
+    assert info.value.field == "npz.depth_m (tooth 1, deepest pixel)" and "0.005] m" in info.value.allowed
+
+
+@pytest.mark.parametrize("teeth, shown, words", [
+    (np.array([1, 1]), 1, "tooth 1 appears 2 times"),         # merged silently into one tooth before
+    (np.array([0.5, 4.0]), 0.5, "tooth 0.5 is not one"),      # truncated to tooth 0 before
+])
+def test_npz_duplicate_or_fractional_teeth_refused(tmp_path, teeth, shown, words):
+    with pytest.raises(InputError) as info:
+        load_npz(_npz_with(tmp_path, "teeth.npz", teeth=teeth))
+    assert info.value.field == "npz.teeth" and info.value.value == shown and words in info.value.allowed
+
+
+def test_npz_non_scalar_field_and_npy_file_raise_input_error(tmp_path):
+    """A non-scalar n_profile and a .npy file given as a pit map name the field / file (a bare TypeError before)."""
+    with pytest.raises(InputError) as info:
+        load_npz(_npz_with(tmp_path, "arr.npz", n_profile=np.array([24, 1])))
+    assert info.value.field == "npz.n_profile" and "single integer" in info.value.allowed
+    np.save(tmp_path / "plain.npy", np.zeros(3))
+    with pytest.raises(InputError) as info:
+        load_npz(tmp_path / "plain.npy")
+    assert info.value.field == "npz" and "plain.npy" in info.value.value and ".npy file" in info.value.allowed
+
+
+def test_png_directory_keeps_gear_and_grid(tmp_path):
+    """A PNG directory's sidecar brings a wheel map back as wheel (pinion before) and refuses another grid of the
+    same shape (another pair's flank: loaded silently before) or another gear or pair, naming the field."""
+    from datagen.geometry import preset
+    spur, helical = preset("spur-gds"), preset("helical-dct")
+    grid = spur.flank_grid("wheel", 24, 100)
+    pm = make_pit_map(grid, shape="ellipse", severity={0: 0.2}, seed=1, gear="wheel")
+    save_pit_pngs(pm, tmp_path / "w", pair_name=spur.name)
+    back = load_pit_pngs(tmp_path / "w", grid)
+    assert back.gear == "wheel" and back.pitted_teeth == [0]
+    assert load_pit_pngs(tmp_path / "w", grid, gear="wheel", pair_name=spur.name).gear == "wheel"
+    other = helical.flank_grid("wheel", 24, 100)
+    assert other.shape == grid.shape and other != grid
+    with pytest.raises(InputError) as info:
+        load_pit_pngs(tmp_path / "w", other)
+    assert info.value.field.startswith("pitmap.json.") and "another grid" in info.value.allowed
+    with pytest.raises(InputError) as info:
+        load_pit_pngs(tmp_path / "w", grid, gear="pinion")
+    assert info.value.field == "pitmap.json.gear" and info.value.value == "wheel"
+    with pytest.raises(InputError) as info:
+        load_pit_pngs(tmp_path / "w", grid, pair_name=helical.name)
+    assert info.value.field == "pitmap.json.pair" and info.value.value == spur.name
+
+
+def test_png_directory_without_sidecar_reads_with_warning(tmp_path):
+    """An old (or hand-painted) directory without the sidecar is read as before, with a warning."""
+    pm = _bowl_map(COARSE)
+    save_pit_pngs(pm, tmp_path / "old")
+    (tmp_path / "old" / "pitmap.json").unlink()
+    with pytest.warns(UserWarning, match="gear and grid .* could not be checked"):
+        back = load_pit_pngs(tmp_path / "old", COARSE, gear="wheel")
+    assert back.gear == "wheel" and sorted(back.depth_m) == [1, 4]

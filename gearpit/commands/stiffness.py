@@ -2,6 +2,9 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import hashlib
+import inspect
 import json
 from pathlib import Path
 
@@ -50,12 +53,35 @@ def parse_grid(text: str) -> tuple[int, int]:
     return rows, cols
 
 
+#: the pit map of a pitted run, written beside summary.json (datagen.pitio NPZ)
+PIT_MAP_FILE = "pits.npz"
 #: pit depth of a --photo or binary --mask pit map when --depth-mm is not given (mm)
 DEFAULT_DEPTH_MM = 0.2
 
 
+def file_sha256(path: Path) -> str:
+    """SHA-256 (hex) of a file's bytes, so that a summary names exactly the input it was computed from."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def photo_options() -> dict:
+    """The extraction options ``--photo`` uses: every keyword of :func:`datagen.photo.pit_map_from_image` the
+    command does not set itself, at its default (passed explicitly, so the summary records what ran)."""
+    from datagen.photo import pit_map_from_image
+
+    own = {"gear", "tooth", "depth_m"}
+    return {name: prm.default for name, prm in inspect.signature(pit_map_from_image).parameters.items()
+            if prm.kind is inspect.Parameter.KEYWORD_ONLY and name not in own}
+
+
 def build_pits(args, pair):
-    """The pit map the arguments describe (None for a healthy pair); validates everything first."""
+    """The pit map the arguments describe (None for a healthy pair) and its provenance (what summary.json
+    records to rebuild it: the source file, its SHA-256 and its contents or the options used); validates
+    everything first."""
     given = [a for a in ("pits", "mask", "photo") if getattr(args, a) is not None]
     require(len(given) <= 1, "--pits/--mask/--photo", given, "at most one pit source")
     for flag, value in (("--tooth", args.tooth), ("--depth-mm", args.depth_mm)):
@@ -64,25 +90,36 @@ def build_pits(args, pair):
     args.tooth = 0 if args.tooth is None else args.tooth
     args.depth_mm = DEFAULT_DEPTH_MM if args.depth_mm is None else args.depth_mm
     if not given:
-        return None
+        return None, None
     rows, cols = parse_grid(args.grid)
     grid = pair.flank_grid(args.gear, rows, cols)
     require(0 <= args.tooth < pair._gear(args.gear).teeth, "--tooth", args.tooth,
             f"a tooth index in [0, {pair._gear(args.gear).teeth - 1}]")
     require_depth("--depth-mm", args.depth_mm, "mm")
+    source = getattr(args, given[0])
+    prov = {"source": given[0], "file": str(source), "gear": args.gear, "grid": f"{rows}x{cols}"}
     if args.pits is not None:
         from datagen.pits import PitSpec
 
         doc = read_toml(args.pits)
         check_keys(doc, {"pits"}, "", required={"pits"})
-        return PitSpec.from_dict(doc["pits"]).build(grid, args.gear)
+        spec = PitSpec.from_dict(doc["pits"])
+        prov.update(sha256=file_sha256(args.pits), table=doc["pits"], spec=dataclasses.asdict(spec))
+        return spec.build(grid, args.gear), prov
+    prov.update(tooth=args.tooth, depth_mm=args.depth_mm)
     if args.mask is not None:
         from datagen.pitio import load_mask_png
 
-        return load_mask_png(args.mask, grid, gear=args.gear, tooth=args.tooth, depth_m=args.depth_mm * 1e-3)
+        pits = load_mask_png(args.mask, grid, gear=args.gear, tooth=args.tooth, depth_m=args.depth_mm * 1e-3)
+        prov.update(sha256=file_sha256(args.mask))
+        return pits, prov
     from datagen.photo import pit_map_from_image
 
-    return pit_map_from_image(args.photo, grid, gear=args.gear, tooth=args.tooth, depth_m=args.depth_mm * 1e-3)
+    options = photo_options()
+    pits = pit_map_from_image(args.photo, grid, gear=args.gear, tooth=args.tooth, depth_m=args.depth_mm * 1e-3,
+                              **options)
+    prov.update(sha256=file_sha256(args.photo), extraction=options)
+    return pits, prov
 
 
 def write_stiffness_csv(ms, path: Path) -> None:
@@ -99,7 +136,7 @@ def run(args: argparse.Namespace) -> int:
     pair = load_pair(args.pair) if args.pair else preset(args.preset)
     if args.n_slices is not None:
         require_n_slices(pair, args.n_slices, "--n-slices")
-    pits = build_pits(args, pair)
+    pits, provenance = build_pits(args, pair)
     require(args.positions_per_cycle >= 4, "--positions-per-cycle", args.positions_per_cycle, "an integer >= 4")
     n_slices = resolve_n_slices(pair, () if pits is None else (pits,), args.n_slices)
     require_record_fits(pair, args.positions_per_cycle, n_slices,
@@ -119,9 +156,13 @@ def run(args: argparse.Namespace) -> int:
         plot_stiffness(curves, tmp, title=f"{pair.name}: mesh stiffness over one revolution")
     summary = ms.summary()
     if pits is not None:
+        from datagen.pitio import save_npz
+
         summary["severity_by_tooth"] = {str(t): s for t, s in pits.severities().items()}
+        save_npz(pits, args.out / PIT_MAP_FILE)   # the map itself (a photo's mask), read back with load_npz
+        summary["pits"] = {**provenance, "pit_map_file": PIT_MAP_FILE}
     with atomic_path(args.out / "summary.json") as tmp:
-        tmp.write_text(json.dumps(summary, indent=2))
+        tmp.write_text(json.dumps(summary, indent=2, default=str))   # default: a TOML date, shown as text
     if args.json:
-        print(json.dumps(summary))
+        print(json.dumps(summary, default=str))
     return 0
