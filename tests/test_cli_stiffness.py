@@ -119,7 +119,7 @@ def test_photo_run_records_photo_hash_options_and_mask(tmp_path):
     rec = s["pits"]
     assert rec["source"] == "photo" and rec["file"] == str(photo) and rec["tooth"] == 2 and rec["depth_mm"] == 0.15
     assert rec["sha256"] == hashlib.sha256(photo.read_bytes()).hexdigest()
-    assert {"crop", "rot90", "sigma_px", "flatten"} <= set(rec["extraction"])
+    assert {"crop", "rot90", "sigma_grid_px", "flatten"} <= set(rec["extraction"])
     saved = load_npz(out / rec["pit_map_file"])
     assert saved.pitted_teeth == [2] and s["pitted_teeth"] == {"pinion": [2]}
     again = pit_map_from_image(photo, preset("spur-gds").flank_grid("pinion", 30, 60), tooth=2, depth_m=0.15e-3,
