@@ -107,7 +107,9 @@ def read_gray(image: str | Path | np.ndarray) -> np.ndarray:
     if isinstance(image, (str, Path)):
         require(not (Path(image).is_file() and _truncated_jpeg(Path(image))), "image", str(image),
                 "a complete JPEG (this one ends before its end-of-image marker: truncated or corrupt)")
-        arr = cv2.imread(str(image), cv2.IMREAD_UNCHANGED)
+        # ANYCOLOR | ANYDEPTH: 8- or 16-bit, gray or colour, turned as the camera's EXIF orientation says (a
+        # phone's portrait photo is stored sideways with an orientation tag; IMREAD_UNCHANGED ignores the tag)
+        arr = cv2.imread(str(image), cv2.IMREAD_ANYCOLOR | cv2.IMREAD_ANYDEPTH)
         if arr is None:
             raise InputError("image", str(image), "a readable image file (PNG, JPEG, TIFF, BMP)")
     else:
@@ -311,6 +313,7 @@ def _disc(radius: int) -> np.ndarray:
 
 
 def extraction_steps(image: str | Path | np.ndarray, grid: FlankGrid, *, crop=None, rot90: int = 0,
+                     check_aspect: bool = True,
                      sigma_grid_px: float = DEFAULT_SIGMA_GRID_PX, flatten: str = "rows",
                      background_grid_px: float | None = None,
                      min_area_grid_px: float | None = None) -> ExtractionSteps:
@@ -333,6 +336,8 @@ def extraction_steps(image: str | Path | np.ndarray, grid: FlankGrid, *, crop=No
     gray, box = _crop(read_gray(image), crop)
     gray = np.ascontiguousarray(np.rot90(gray, rot90))
     photo_shape = gray.shape
+    if check_aspect:
+        check_flank_aspect(photo_shape, grid)
     work = working_shape(photo_shape, grid)
     if work != photo_shape:
         gray = cv2.resize(gray, (work[1], work[0]), interpolation=cv2.INTER_AREA)
@@ -454,6 +459,7 @@ def resample_mask(mask: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
 
 
 def mask_from_image(image: str | Path | np.ndarray, grid: FlankGrid, *, crop=None, rot90: int = 0,
+                    check_aspect: bool = True,
                     sigma_grid_px: float = DEFAULT_SIGMA_GRID_PX, flatten: str = "rows",
                     background_grid_px: float | None = None, min_area_grid_px: float | None = None) -> np.ndarray:
     """Boolean pit mask on ``grid`` from a photo of one flank.
@@ -471,6 +477,10 @@ def mask_from_image(image: str | Path | np.ndarray, grid: FlankGrid, *, crop=Non
         Quarter turns counter-clockwise (``numpy.rot90``) after cropping, so that
         rows run from the start of active profile (top) to the tip and columns
         across the face.
+    check_aspect : bool
+        Refuse a (cropped, rotated) photo whose height over width is further than
+        :data:`MAX_ASPECT_FACTOR` from the flank's (profile length over contact face
+        width): a photo turned a quarter, or not cropped to the flank.
     sigma_grid_px : float
         Gaussian smoothing, in flank-grid pixels (per direction), default 0.25.
     flatten : {"rows", "polynomial", "blur", "none"}
@@ -490,13 +500,35 @@ def mask_from_image(image: str | Path | np.ndarray, grid: FlankGrid, *, crop=Non
     -------
     ndarray of bool, shape ``grid.shape``
     """
-    steps = extraction_steps(image, grid, crop=crop, rot90=rot90, sigma_grid_px=sigma_grid_px, flatten=flatten,
+    steps = extraction_steps(image, grid, crop=crop, rot90=rot90, check_aspect=check_aspect,
+                             sigma_grid_px=sigma_grid_px, flatten=flatten,
                              background_grid_px=background_grid_px, min_area_grid_px=min_area_grid_px)
     return resample_mask(steps.mask, grid.shape)
 
 
+#: a photo's height / width may differ from the flank's (profile length / contact face width) by this factor
+#: either way (a loose crop, a photo stretched to the grid's pixel shape); a photo turned a quarter is off by the
+#: square of the flank's aspect (30x for spur-gds's 3.6 x 20 mm flank)
+MAX_ASPECT_FACTOR = 4.0
+
+
+def check_flank_aspect(photo_shape: tuple, grid: FlankGrid) -> None:
+    """Refuse a photo whose shape cannot be the flank's (:data:`MAX_ASPECT_FACTOR`), naming both aspects and
+    the remedies (rot90 / --photo-rot90, crop / --photo-crop, check_aspect=False / --photo-any-aspect)."""
+    width = grid.contact_face_width_m or grid.face_width_m
+    flank = grid.profile_length_m / width
+    photo = photo_shape[0] / photo_shape[1]
+    factor = max(photo / flank, flank / photo)
+    require(factor <= MAX_ASPECT_FACTOR, "image.aspect",
+            f"{photo_shape[0]} x {photo_shape[1]} px (height / width {photo:.3g})",
+            f"a flank's proportions: profile (rows, start of active profile at the top) over face width "
+            f"(columns) {flank:.3g}, within a factor {MAX_ASPECT_FACTOR:g}; a photo turned a quarter needs rot90 = 1 "
+            "(--photo-rot90 1), a photo of more than the flank a crop (--photo-crop), or check_aspect=False "
+            "(--photo-any-aspect) when its proportions are known to differ")
+
+
 def pit_map_from_image(path: str | Path | np.ndarray, grid: FlankGrid, *, gear: str = "pinion", tooth: int = 0,
-                       depth_m: float = DEFAULT_DEPTH_M, crop=None, rot90: int = 0,
+                       depth_m: float = DEFAULT_DEPTH_M, crop=None, rot90: int = 0, check_aspect: bool = True,
                        sigma_grid_px: float = DEFAULT_SIGMA_GRID_PX, flatten: str = "rows",
                        background_grid_px: float | None = None, min_area_grid_px: float | None = None) -> PitMap:
     """Pit map with one tooth whose pits are extracted from a photo, at uniform depth ``depth_m`` (m).
@@ -506,6 +538,7 @@ def pit_map_from_image(path: str | Path | np.ndarray, grid: FlankGrid, *, gear: 
     require_depth("pits.depth_m", depth_m)
     require(isinstance(tooth, int) and not isinstance(tooth, bool) and tooth >= 0, "pits.tooth", tooth,
             "an integer >= 0")
-    mask = mask_from_image(path, grid, crop=crop, rot90=rot90, sigma_grid_px=sigma_grid_px, flatten=flatten,
+    mask = mask_from_image(path, grid, crop=crop, rot90=rot90, check_aspect=check_aspect,
+                           sigma_grid_px=sigma_grid_px, flatten=flatten,
                            background_grid_px=background_grid_px, min_area_grid_px=min_area_grid_px)
     return PitMap(grid=grid, depth_m={tooth: np.where(mask, depth_m, 0.0)}, gear=gear)

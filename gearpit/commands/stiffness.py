@@ -30,7 +30,18 @@ def register(sub) -> None:
     src.add_argument("--pair", type=Path, help="gear pair TOML ([pair] table, units in key names)")
     p.add_argument("--pits", type=Path, help="TOML with a [pits] table (shape, teeth, severity, depth_mm, seed)")
     p.add_argument("--mask", type=Path, help="pit mask PNG of one tooth (painted: white = pit, or 16-bit depth in um)")
-    p.add_argument("--photo", type=Path, help="photo of a flank; the pit mask is extracted from it")
+    p.add_argument("--photo", type=Path,
+                   help="photo of one flank, the pit mask is extracted from it: rows along the profile (start of "
+                        "active profile at the top, tip at the bottom), columns across the face width; crop and turn "
+                        "it with --photo-crop / --photo-rot90")
+    p.add_argument("--photo-crop", default="none",
+                   help="the flank's region in the photo: none (the whole photo), auto (the bright flank's bounding "
+                        "box) or top,bottom,left,right in photo pixels (half-open)")
+    p.add_argument("--photo-rot90", type=int, default=0,
+                   help="quarter turns counter-clockwise after cropping (1 for a photo taken with the face vertical)")
+    p.add_argument("--photo-any-aspect", action="store_true",
+                   help="accept a photo whose height/width is far from the flank's (refused by default: a photo "
+                        "turned a quarter)")
     p.add_argument("--tooth", type=int, default=None, help="tooth that --mask/--photo applies to (default 0)")
     p.add_argument("--depth-mm", type=float, default=None,
                    help="pit depth for --photo / binary --mask (mm, 0.001 .. 5; default 0.2)")
@@ -73,9 +84,24 @@ def photo_options() -> dict:
     command does not set itself, at its default (passed explicitly, so the summary records what ran)."""
     from datagen.photo import pit_map_from_image
 
-    own = {"gear", "tooth", "depth_m"}
+    own = {"gear", "tooth", "depth_m", "crop", "rot90", "check_aspect"}
     return {name: prm.default for name, prm in inspect.signature(pit_map_from_image).parameters.items()
             if prm.kind is inspect.Parameter.KEYWORD_ONLY and name not in own}
+
+
+def parse_photo_crop(text: str):
+    """``--photo-crop``: None (``none``), ``"auto"``, or (top, bottom, left, right) photo pixels."""
+    t = str(text).strip().lower()
+    if t in ("none", ""):
+        return None
+    if t == "auto":
+        return "auto"
+    parts = t.split(",")
+    ok = len(parts) == 4 and all(p.strip().isdigit() for p in parts)
+    require(ok, "--photo-crop", text, "none, auto, or top,bottom,left,right in photo pixels (integers >= 0)")
+    top, bottom, left, right = (int(p) for p in parts)
+    require(bottom > top and right > left, "--photo-crop", text, "bottom > top and right > left")
+    return (top, bottom, left, right)
 
 
 def build_pits(args, pair):
@@ -84,6 +110,9 @@ def build_pits(args, pair):
     everything first."""
     given = [a for a in ("pits", "mask", "photo") if getattr(args, a) is not None]
     require(len(given) <= 1, "--pits/--mask/--photo", given, "at most one pit source")
+    for flag, value, default in (("--photo-crop", args.photo_crop, "none"), ("--photo-rot90", args.photo_rot90, 0),
+                                 ("--photo-any-aspect", args.photo_any_aspect, False)):
+        require(value == default or given[:1] == ["photo"], flag, value, "only with --photo")
     for flag, value in (("--tooth", args.tooth), ("--depth-mm", args.depth_mm)):
         require(value is None or given[:1] in (["mask"], ["photo"]), flag, value,
                 "only with --mask or --photo (a --pits file states its own teeth and depth_mm)")
@@ -115,7 +144,8 @@ def build_pits(args, pair):
         return pits, prov
     from datagen.photo import pit_map_from_image
 
-    options = photo_options()
+    options = {"crop": parse_photo_crop(args.photo_crop), "rot90": args.photo_rot90,
+               "check_aspect": not args.photo_any_aspect, **photo_options()}
     pits = pit_map_from_image(args.photo, grid, gear=args.gear, tooth=args.tooth, depth_m=args.depth_mm * 1e-3,
                               **options)
     prov.update(sha256=file_sha256(args.photo), extraction=options)
