@@ -115,10 +115,15 @@ def test_blur_background_also_works():
 
 
 def test_uneven_lighting_needs_flattening():
-    """Without flattening the harsh lighting defeats the threshold (IoU < 0.5): the test photos are not trivial."""
+    """Without flattening the harsh lighting defeats the threshold (IoU < 0.5): the test photos are not trivial;
+    and the unflattened surface varies by 0.39 of its level, which the extraction warns about."""
+    from datagen.photo import PhotoWarning
+
     truth = truth_mask(3)
     photo = render_flank_photo(truth, 3, **SETTINGS["harsh"])
-    assert iou(mask_from_image(photo, GRID, flatten="none"), resample_mask(truth, GRID.shape)) < 0.5
+    with pytest.warns(PhotoWarning, match="noise"):
+        mask = mask_from_image(photo, GRID, flatten="none")
+    assert iou(mask, resample_mask(truth, GRID.shape)) < 0.5
 
 
 def test_intact_flank_gives_no_pits():
@@ -285,3 +290,35 @@ def test_cli_photo_crop_and_turn(tmp_path):
     assert got[0]["pits"]["extraction"]["crop"] == [30, framed.shape[0] - 30, 30, framed.shape[1] - 30]
     assert got[0]["pits"]["extraction"]["rot90"] == 1
     assert main(common[:1] + ["--preset", "spur-gds", "--photo-rot90", "1", "--out", str(tmp_path / "d")]) == 2
+
+
+@pytest.mark.parametrize("kind", ["uniform", "noise", "dark", "checkerboard", "scene"])
+def test_an_image_unlike_a_lit_flank_is_warned(kind):
+    """Images that are no lit flank gave severity 0 without a word (an audit: uniform, noise, dark, a
+    checkerboard; a flank on a dark background 0.12): now a PhotoWarning says why the mask means little. The
+    rendered flank photos (two settings, pitted and not) get none."""
+    from datagen.photo import PhotoWarning
+
+    rng = np.random.default_rng(0)
+    flank = render_flank_photo(truth_mask(2), 2, **SETTINGS["mild"])
+    scene = np.full((PHOTO[0] * 3, PHOTO[1] * 2), 12, np.uint8)
+    scene[PHOTO[0]:2 * PHOTO[0], PHOTO[1] // 2:PHOTO[1] // 2 + PHOTO[1]] = flank // 3
+    image = {"uniform": np.full(PHOTO, 128, np.uint8),
+             "noise": rng.integers(0, 256, PHOTO, dtype=np.uint8),
+             "dark": (rng.random(PHOTO) * 20).astype(np.uint8),
+             "checkerboard": np.kron((np.indices((24, 80)).sum(0) % 2 * 255).astype(np.uint8), np.ones((10, 10), np.uint8)),
+             "scene": scene}[kind]
+    with pytest.warns(PhotoWarning):
+        mask_from_image(image, GRID, check_aspect=False)
+
+
+@pytest.mark.parametrize("setting, seed", [("mild", 2), ("harsh", 3), ("mild", 5)])
+def test_a_rendered_flank_photo_is_not_warned(setting, seed):
+    import warnings
+
+    from datagen.photo import PhotoWarning
+
+    for truth in (truth_mask(seed), np.zeros(PHOTO, bool)):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", PhotoWarning)
+            mask_from_image(render_flank_photo(truth, seed, **SETTINGS[setting]), GRID)

@@ -6,6 +6,7 @@ import dataclasses
 import hashlib
 import inspect
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -146,9 +147,18 @@ def build_pits(args, pair):
 
     options = {"crop": parse_photo_crop(args.photo_crop), "rot90": args.photo_rot90,
                "check_aspect": not args.photo_any_aspect, **photo_options()}
-    pits = pit_map_from_image(args.photo, grid, gear=args.gear, tooth=args.tooth, depth_m=args.depth_mm * 1e-3,
-                              **options)
-    prov.update(sha256=file_sha256(args.photo), extraction=options)
+    import warnings
+
+    from datagen.photo import PhotoWarning
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", PhotoWarning)
+        pits = pit_map_from_image(args.photo, grid, gear=args.gear, tooth=args.tooth, depth_m=args.depth_mm * 1e-3,
+                                  **options)
+    said = [str(w.message) for w in caught if issubclass(w.category, PhotoWarning)]
+    for text in said:                       # one line each, as every other warning of the CLI
+        print(f"warning: {text}", file=sys.stderr)
+    prov.update(sha256=file_sha256(args.photo), extraction=options, warnings=said)
     return pits, prov
 
 
