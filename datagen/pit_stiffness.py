@@ -41,6 +41,7 @@ import numpy as np
 
 from datagen.compliance import PairCompliance, ToothBeam, beam_compliance, pair_compliance
 from datagen.flank import PitMap
+from datagen.pitshapes import DEPTH_RANGE_M
 from gearpit.errors import InputError, require
 
 PIT_MODELS = ("no_contact", "weak_spring")
@@ -68,8 +69,13 @@ def normalise_pits(pair, pits) -> tuple[PitMap, ...]:
             if not math.isclose(got, want, rel_tol=1e-6):
                 raise InputError(f"pits.grid.{name}", got, f"{want:.6g} (the {pm.gear} flank of pair {pair.name})")
         z = pair._gear(pm.gear).teeth
-        for t in pm.depth_m:
+        deepest = DEPTH_RANGE_M[1]
+        for t, d in pm.depth_m.items():
             require(t < z, "pits.tooth", t, f"a tooth index in [0, {z - 1}] of the {pm.gear}")
+            d = np.asarray(d, float)
+            require(bool(np.all(np.isfinite(d))) and float(d.min()) >= 0.0 and float(d.max()) <= deepest,
+                    f"pits.depth_m[{t}]", f"{float(np.nanmin(d)):.3g} .. {float(np.nanmax(d)):.3g} m",
+                    f"depths in [0, {deepest:g}] m (a map written in mm and read as metres is 1000 times too deep)")
     return maps
 
 

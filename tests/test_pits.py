@@ -390,3 +390,19 @@ def test_png_directory_without_sidecar_reads_with_warning(tmp_path):
     with pytest.warns(UserWarning, match="gear and grid .* could not be checked"):
         back = load_pit_pngs(tmp_path / "old", COARSE, gear="wheel")
     assert back.gear == "wheel" and sorted(back.depth_m) == [1, 4]
+
+
+def test_a_pit_map_built_in_python_with_depths_in_mm_is_refused_by_the_stiffness():
+    """Every file and CLI entry checks pit depths (1 um .. 5 mm); a PitMap built in Python did not, and 0.2 read
+    as metres (a depth meant in mm) reached the stiffness (an audit: mean stiffness 3.725e8 N/m, no word)."""
+    from datagen.geometry import preset
+    from datagen.stiffness import mesh_stiffness
+
+    pair = preset("spur-gds")
+    grid = pair.flank_grid("pinion", 40, 100)
+    d = np.zeros(grid.shape)
+    d[15:20, 40:50] = 0.2
+    with pytest.raises(InputError, match=r"pits.depth_m\[0\].*1000 times"):
+        mesh_stiffness(pair, pits=PitMap(grid=grid, depth_m={0: d}, gear="pinion"), positions_per_cycle=8)
+    d[15:20, 40:50] = 0.2e-3
+    mesh_stiffness(pair, pits=PitMap(grid=grid, depth_m={0: d}, gear="pinion"), positions_per_cycle=8)
