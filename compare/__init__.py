@@ -6,6 +6,7 @@
 - ``sidecar``       the sidecar (JSON/TOML): what a file cannot say (operating point, pair, channels); found beside it
 - ``measurement``   loading and validation of a file with its sidecar -> :class:`Measurement`
 - ``speed``         speed refined from the tachometer or the mesh harmonics; the shaft angle track
+- ``speed_track``   a record whose speed drifts: what is slow enough to follow, and following it (pulses, mesh phase)
 - ``spectra``       order-domain records (pinion and wheel angle), power and envelope spectra, noise floors
 - ``plan``          the named physical locations of a comparison, fixed once from the measurement
 - ``views``         order, band, envelope, TSA and statistics views: levels (dB) at the plan's locations

@@ -8,6 +8,8 @@
 - ``pitshapes``  drawing pits: ellipses, rectangles, progressive clusters, depth profiles
 - ``pitio``      pit maps as PNG (16-bit depth in um, or painted masks) and NPZ
 - ``photo``      pit masks extracted from a photo of a flank
+- ``photo_input`` reading a flank photo, checking it can be one (proportions, a lit surface)
+- ``photo_lighting`` the photo's illumination, divided out before pits are sought
 - ``compliance`` potential-energy tooth compliance terms (bending, shear, axial, fillet, Hertz), pair compliance table
 - ``stiffness``  time-varying mesh stiffness over a revolution, slices, pits
 - ``pit_stiffness``  how a pit map changes the compliances of the slices it touches (pit models, section loss)

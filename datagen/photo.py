@@ -66,8 +66,10 @@ from scipy import ndimage
 from skimage.filters import threshold_otsu
 
 from datagen.flank import FlankGrid, PitMap
+from datagen.photo_input import PhotoWarning, check_flank_aspect, photo_warnings, read_gray
+from datagen.photo_lighting import SATURATED, background_blur, background_polynomial, background_rows
 from datagen.pitshapes import DEFAULT_DEPTH_M, require_depth
-from gearpit.errors import InputError, require, require_positive
+from gearpit.errors import require, require_positive
 
 FLATTEN_METHODS = ("rows", "polynomial", "blur", "none")
 
@@ -97,51 +99,6 @@ class ExtractionSteps:
     mask: np.ndarray
     crop: tuple[int, int, int, int]
     photo_shape: tuple[int, int]
-
-
-def read_gray(image: str | Path | np.ndarray) -> np.ndarray:
-    """Grayscale image in [0, 1] (float64) from a file or an array.
-
-    Accepts 8- or 16-bit, gray, BGR or BGRA images (alpha ignored), or a 2-D
-    float array already in [0, 1]. An unreadable file, or a JPEG cut short
-    (no end-of-image marker in its last 4 kB), raises InputError naming it.
-    """
-    if isinstance(image, (str, Path)):
-        require(not (Path(image).is_file() and _truncated_jpeg(Path(image))), "image", str(image),
-                "a complete JPEG (this one ends before its end-of-image marker: truncated or corrupt)")
-        # ANYCOLOR | ANYDEPTH: 8- or 16-bit, gray or colour, turned as the camera's EXIF orientation says (a
-        # phone's portrait photo is stored sideways with an orientation tag; IMREAD_UNCHANGED ignores the tag)
-        arr = cv2.imread(str(image), cv2.IMREAD_ANYCOLOR | cv2.IMREAD_ANYDEPTH)
-        if arr is None:
-            raise InputError("image", str(image), "a readable image file (PNG, JPEG, TIFF, BMP)")
-    else:
-        arr = np.asarray(image)
-    require(arr.ndim in (2, 3) and min(arr.shape[:2]) >= 8, "image.shape", arr.shape,
-            "a 2-D gray or 3-D colour image at least 8 x 8 pixels")
-    if arr.ndim == 3:
-        require(arr.shape[2] in (3, 4), "image.channels", arr.shape[2], "3 (BGR) or 4 (BGRA)")
-        arr = cv2.cvtColor(arr[:, :, :3], cv2.COLOR_BGR2GRAY)
-    if arr.dtype == np.uint8:
-        return arr.astype(np.float64) / 255.0
-    if arr.dtype == np.uint16:
-        return arr.astype(np.float64) / 65535.0
-    if arr.dtype == bool:
-        return arr.astype(np.float64)
-    out = arr.astype(np.float64)
-    require(bool(np.all(np.isfinite(out))) and out.min() >= 0 and out.max() <= 1, "image.values",
-            f"{out.dtype} in [{out.min():g}, {out.max():g}]", "uint8, uint16, or floats in [0, 1]")
-    return out
-
-
-def _truncated_jpeg(path: Path) -> bool:
-    """True for a JPEG without its end-of-image marker (FF D9) near the end: OpenCV decodes such a file,
-    filling the missing part with grey, and only prints "Premature end of JPEG file"."""
-    with open(path, "rb") as f:
-        if f.read(2) != b"\xff\xd8":
-            return False
-        f.seek(0, 2)
-        f.seek(max(f.tell() - 4096, 0))
-        return b"\xff\xd9" not in f.read()
 
 
 def flank_crop_box(gray: np.ndarray) -> tuple[int, int, int, int]:
@@ -181,106 +138,6 @@ def _crop(gray: np.ndarray, crop) -> tuple[np.ndarray, tuple[int, int, int, int]
 #: per-row fit (a few %, at a streak's ends) is not a pit; the pit floors of the tests and the audit photos
 #: are 40-65 % darker than the flank
 MIN_PIT_CONTRAST = 0.05
-
-#: gray level at and above which a pixel is taken as clipped (a saturated highlight)
-_SATURATED = 0.995
-
-#: degree of the per-row lighting polynomial across the face (a streak's fall-off along the face is not quadratic)
-_ROW_DEGREE = 4
-
-
-def _background_rows(gray: np.ndarray, support: np.ndarray, n_iter: int = 10) -> np.ndarray:
-    """Lighting as one robust quadratic across the face per row (per profile height).
-
-    A flank's lighting changes quickly along the curved profile (a specular
-    streak along the face at one height, shading towards root and tip) and
-    slowly across the straight face, so every row gets its own quadratic in
-    the face coordinate, fitted to its intact pixels with outliers on both
-    sides (pit floors, lit pit walls) dropped beyond 2.5 sigma. Pits only
-    cover part of a row, so they cannot pull a row's fit down; rows with
-    fewer than 10 % intact pixels take the coefficients of the nearest rows
-    that have them. Unlike one surface for the whole flank, a streak (a
-    bright band spanning the face) does not leave the rows beside it darker
-    than their fit.
-    """
-    h, w = gray.shape
-    x = (np.arange(w) + 0.5) / w - 0.5
-    basis = np.stack([x ** k for k in range(_ROW_DEGREE + 1)])   # (n, w)
-    gram_terms = basis[:, None, :] * basis[None, :, :]       # (3, 3, w)
-    base = support if np.count_nonzero(support) >= 100 else np.ones(gray.shape, bool)
-
-    def fit(keep):
-        wts = keep.astype(np.float64)
-        gram = np.einsum("rw,ijw->rij", wts, gram_terms) + 1e-9 * np.eye(len(basis))
-        rhs = np.einsum("rw,iw->ri", wts * gray, basis)
-        return np.linalg.solve(gram, rhs[..., None])[..., 0], wts.sum(axis=1)
-
-    coef, count = fit(base)
-    keep = base & (gray >= coef @ basis)   # start from the upper half: pits only pull the fit down
-    for _ in range(n_iter):
-        coef, count = fit(keep)
-        resid = gray - coef @ basis
-        r_keep = resid[keep]
-        sigma = 1.4826 * float(np.median(np.abs(r_keep - np.median(r_keep)))) + 1e-9 if r_keep.size else 1.0
-        new_keep = base & (np.abs(resid) < 2.5 * sigma)
-        if np.array_equal(new_keep, keep):
-            break
-        keep = new_keep
-    good = count >= max(0.1 * w, 6)
-    if not good.any():
-        return np.full(gray.shape, max(float(np.median(gray)), 1e-3))
-    if not good.all():
-        rows = np.arange(h)
-        coef = np.stack([np.interp(rows, rows[good], coef[good, i]) for i in range(len(basis))], axis=1)
-    background = coef @ basis
-    clipped = gray >= _SATURATED    # left out of the fit, where the polynomial may run away: lit, not pitted
-    background[clipped] = gray[clipped]
-    return np.maximum(background, 1e-3)
-
-
-def _background_polynomial(gray: np.ndarray, support: np.ndarray, n_iter: int = 8) -> np.ndarray:
-    """Lighting as a quadratic surface least-squares fitted to the intact pixels.
-
-    Fitted on at most ~20 000 support pixels (a regular subsample), then
-    refitted without pixels more than 2.5 sigma below the surface (pits are
-    dark, so only low outliers are dropped).
-    """
-    h, w = gray.shape
-    rows, cols = np.nonzero(support if np.count_nonzero(support) >= 100 else np.ones(gray.shape, bool))
-    step = max(1, rows.size // 20_000)
-    rows, cols = rows[::step], cols[::step]
-    y, x = (rows + 0.5) / h - 0.5, (cols + 0.5) / w - 0.5
-    basis = np.stack([np.ones_like(x), x, y, x * x, x * y, y * y], axis=-1)
-    z = gray[rows, cols]
-    coef, *_ = np.linalg.lstsq(basis, z, rcond=None)
-    keep = z - basis @ coef >= 0  # start from the upper half: pits only pull the fit down
-    for _ in range(n_iter):
-        coef, *_ = np.linalg.lstsq(basis[keep], z[keep], rcond=None)
-        resid = z - basis @ coef
-        sigma = 1.4826 * np.median(np.abs(resid[keep] - np.median(resid[keep]))) + 1e-9
-        new_keep = resid > -2.5 * sigma
-        if new_keep.sum() < 6 or np.array_equal(new_keep, keep):
-            break
-        keep = new_keep
-    y, x = np.mgrid[0:h, 0:w]
-    y, x = (y + 0.5) / h - 0.5, (x + 0.5) / w - 0.5
-    surface = coef[0] + coef[1] * x + coef[2] * y + coef[3] * x * x + coef[4] * x * y + coef[5] * y * y
-    return np.maximum(surface, 1e-3)
-
-
-def _background_blur(gray: np.ndarray, support: np.ndarray, background_px: float) -> np.ndarray:
-    """Lighting as a normalised Gaussian blur of the intact pixels (any smooth lighting).
-
-    ``blur(gray * support) / blur(support)`` with standard deviation
-    ``background_px``: pits are left out of the average instead of being
-    smeared into it.
-    """
-    wts = support.astype(np.float64)
-    num = cv2.GaussianBlur(gray * wts, (0, 0), background_px, borderType=cv2.BORDER_REFLECT)
-    den = cv2.GaussianBlur(wts, (0, 0), background_px, borderType=cv2.BORDER_REFLECT)
-    fallback = float(np.median(gray[support])) if support.any() else float(np.median(gray))
-    return np.maximum(np.where(den > 1e-3, num / np.maximum(den, 1e-12), fallback), 1e-3)
-
 
 #: working pixels per flank-grid pixel, at most, in each direction: a larger photo is area-averaged down to this
 #: before any processing (a 4000 x 6000 photo took 24 s and 2.5 GB for a 219 x 1000 grid); finer detail than
@@ -357,7 +214,7 @@ def extraction_steps(image: str | Path | np.ndarray, grid: FlankGrid, *, crop=No
     # the row fit rejects pits itself and takes every pixel (a streak's steep sides are calm nowhere along a
     # row); the whole-flank fits take the brightest calm region
     if flatten == "rows":   # clipped highlights do not show the lighting
-        calm = gray < _SATURATED
+        calm = gray < SATURATED
         # rows crossing the brightest edge-free region start from it (a row more than half pitted is not
         # fitted to its pit floor); the others (a streak's steep sides are edge-free nowhere) from every pixel
         intact = _intact_region(~edges, smooth_raw) & calm
@@ -374,11 +231,11 @@ def extraction_steps(image: str | Path | np.ndarray, grid: FlankGrid, *, crop=No
     open_radius = int(round(OPEN_RADIUS_GRID_PX * k))   # 0 (no opening) on a photo coarser than 1.5x the grid
     for _ in range(2):  # lighting from the intact pixels, then again without the pits found
         if flatten == "rows":
-            background = _background_rows(gray, support)
+            background = background_rows(gray, support)
         elif flatten == "polynomial":
-            background = _background_polynomial(gray, support)
+            background = background_polynomial(gray, support)
         elif flatten == "blur":
-            background = _background_blur(gray, support, bg_px)
+            background = background_blur(gray, support, bg_px)
         else:
             background = np.full(gray.shape, max(float(np.median(gray[support])), 1e-3))
         smoothed = smooth_raw / background
@@ -508,63 +365,6 @@ def mask_from_image(image: str | Path | np.ndarray, grid: FlankGrid, *, crop=Non
     for text in photo_warnings(steps):
         warnings.warn(PhotoWarning(f"{image if isinstance(image, (str, Path)) else 'photo'}: {text}"), stacklevel=2)
     return resample_mask(steps.mask, grid.shape)
-
-
-class PhotoWarning(UserWarning):
-    """A photo that does not look like a lit flank (:func:`photo_warnings`): its mask says little."""
-
-
-#: :func:`photo_warnings`: the intact surface's level (fraction of full scale) below which the photo is too dark or
-#: mostly background, its noise (robust sigma over that level) above which no pit (5 % + 4 sigma darker) can be
-#: told from it, and the 1-99 % range below which the image holds no contrast at all
-MIN_LIT_LEVEL = 0.2
-MAX_RELATIVE_NOISE = 0.2
-MIN_RANGE = 0.02
-
-
-def photo_warnings(steps: "ExtractionSteps") -> list[str]:
-    """What makes a photo unlike a lit flank, one sentence each (empty for a usable photo). Measured on an
-    auditor's images: rendered flank photos (pitted, pit-free, with rust) have an intact level 0.72-0.73 and a
-    noise 0.037-0.040; a uniform image has no range; random noise 0.74 and a checkerboard 0.74 of noise; a dark
-    image 0.26; a page of text and an uncropped scene photo (a flank on a dark background) a level of 0.16 and
-    0.13. Each gave severity 0 (the scene 0.12) without a word."""
-    out = []
-    g = steps.gray
-    p1, p99 = np.percentile(g, [1, 99])
-    if p99 - p1 < MIN_RANGE:
-        return [f"no contrast (1-99 % range {p99 - p1:.3g} of full scale): a uniform image, not a flank photo"]
-    intact = ~steps.mask
-    lit = float(np.median(g[intact])) if intact.any() else 0.0
-    if lit < MIN_LIT_LEVEL:
-        out.append(f"the intact surface's level is {lit:.2f} of full scale (below {MIN_LIT_LEVEL}): an underexposed "
-                   "photo, or one mostly of background (crop it to the flank: --photo-crop)")
-    flat = steps.flattened[intact] if intact.any() else steps.flattened.ravel()
-    noise = 1.4826 * float(np.median(np.abs(flat - np.median(flat))))
-    if noise > MAX_RELATIVE_NOISE:
-        out.append(f"the surface's noise is {noise:.2f} of its level (above {MAX_RELATIVE_NOISE}): pits, at least 5 % "
-                   "plus 4 noise sigmas darker, cannot be told from it (not a flank photo, or far too noisy)")
-    return out
-
-
-#: a photo's height / width may differ from the flank's (profile length / contact face width) by this factor
-#: either way (a loose crop, a photo stretched to the grid's pixel shape); a photo turned a quarter is off by the
-#: square of the flank's aspect (30x for spur-gds's 3.6 x 20 mm flank)
-MAX_ASPECT_FACTOR = 4.0
-
-
-def check_flank_aspect(photo_shape: tuple, grid: FlankGrid) -> None:
-    """Refuse a photo whose shape cannot be the flank's (:data:`MAX_ASPECT_FACTOR`), naming both aspects and
-    the remedies (rot90 / --photo-rot90, crop / --photo-crop, check_aspect=False / --photo-any-aspect)."""
-    width = grid.contact_face_width_m or grid.face_width_m
-    flank = grid.profile_length_m / width
-    photo = photo_shape[0] / photo_shape[1]
-    factor = max(photo / flank, flank / photo)
-    require(factor <= MAX_ASPECT_FACTOR, "image.aspect",
-            f"{photo_shape[0]} x {photo_shape[1]} px (height / width {photo:.3g})",
-            f"a flank's proportions: profile (rows, start of active profile at the top) over face width "
-            f"(columns) {flank:.3g}, within a factor {MAX_ASPECT_FACTOR:g}; a photo turned a quarter needs rot90 = 1 "
-            "(--photo-rot90 1), a photo of more than the flank a crop (--photo-crop), or check_aspect=False "
-            "(--photo-any-aspect) when its proportions are known to differ")
 
 
 def pit_map_from_image(path: str | Path | np.ndarray, grid: FlankGrid, *, gear: str = "pinion", tooth: int = 0,
