@@ -15,7 +15,7 @@
 - ``comparison``    one comparison end to end (measurement + model -> :class:`Comparison`), noise matching
 - ``calibration``   the drive-train nuisances (damping, bearing stiffness) fitted to the measurement first
 - ``calibration_points`` the calibration's scan points: a batch of drive-train values scored, vertex, 1-sigma
-- ``disagreements`` the largest disagreements, ranked, in physical terms
+- ``disagreements`` the largest disagreements, ranked, in physical terms; an unclaimed local fault's TSA signature
 - ``fitspace``      an effect's declared fit parameters as search coordinates; starting points
 - ``search``        the batched search rounds and the quadratic surrogate
 - ``fitting``       one group of candidate effects fitted in batched rounds; each one's best fit and 1-sigma
