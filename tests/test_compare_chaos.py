@@ -229,7 +229,7 @@ def test_a_comparison_reads_a_chaotic_model_by_its_realisations_and_a_regular_on
     """compare.chaos.chaotic_realisations: a model whose nonlinear effect makes the record chaotic (the backlash
     example's 50 um) comes back with ENSEMBLE - 1 further realisations, each unlike the first; the same model at
     140 um (never closed: regular) and a model without a nonlinear effect come back with none, and the first
-    record is the model's own (same as simulating it once)."""
+    record is the model's own (as simulating it once, to rounding)."""
     from compare.chaos import ENSEMBLE, chaotic_realisations
     from compare.comparison import prepare_reference, simulate_model
     from compare.model import ComparisonModel
@@ -243,7 +243,9 @@ def test_a_comparison_reads_a_chaotic_model_by_its_realisations_and_a_regular_on
     assert len(others) == ENSEMBLE - 1
     assert all(np.sqrt(np.mean((o - y) ** 2)) > 0.1 * np.sqrt(np.mean(y ** 2)) for o in others)
     (y_once,) = simulate_model(ref, chaotic)
-    assert np.array_equal(y, y_once)
+    # the model's own record, up to the last bits: simulated in one batch with its twins, the arithmetic may round
+    # differently (numba 0.68.1 / numpy 2.4.6, 2026-12-05: 1.1e-12 for an RMS of 493, bit-equal before)
+    assert np.max(np.abs(y - y_once)) <= 1e-9 * np.sqrt(np.mean(y_once ** 2))
     regular = ComparisonModel(effects=build_effects(ex.known + ({"name": "backlash", "backlash_m": 140e-6},)))
     assert chaotic_realisations(ref, regular)[1] == []
     assert chaotic_realisations(ref, HIDDEN_EXAMPLES["backlash"].model())[1] == []
