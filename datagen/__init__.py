@@ -5,7 +5,8 @@
 - ``design_checks``  undercut, rim, pointed tip, interference, contact ratio of a pair (run when it is built)
 - ``flank``      the flank pixel grid and the pit-depth maps living on it
 - ``pits``       pit maps from a spec: shape family, teeth, severity, seed (TOML ``[pits]``)
-- ``pitshapes``  drawing pits: ellipses, rectangles, progressive clusters, depth profiles
+- ``pitshapes``  drawing pits: ellipses, rectangles, depth profiles, sized to a severity
+- ``pitcluster`` progressive pitting: small pits near the pitch line that grow and merge
 - ``pitio``      pit maps as PNG (16-bit depth in um, or painted masks) and NPZ
 - ``photo``      pit masks extracted from a photo of a flank
 - ``photo_input`` reading a flank photo, checking it can be one (proportions, a lit surface)

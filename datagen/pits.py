@@ -2,9 +2,9 @@
 
 This is the entry point the CLI and experiments use: :func:`make_pit_map` (from
 arguments) and :class:`PitSpec` (from a TOML ``[pits]`` table, lengths in mm at
-the file boundary). The drawing itself (ellipses, rectangles, progressive
-clusters, depth profiles, tolerances) lives in :mod:`datagen.pitshapes`; its
-public functions are re-exported here.
+the file boundary). The drawing itself lives in :mod:`datagen.pitshapes`
+(ellipses, rectangles, depth profiles, tolerances) and :mod:`datagen.pitcluster`
+(progressive clusters); their public functions are re-exported here.
 
 Severity is the pitted fraction of one tooth's active flank (pitted pixels /
 all pixels), as the spur paper's 15/20/25 % [2]_. Randomness: tooth ``t`` draws
@@ -27,7 +27,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from datagen.flank import FlankGrid, PitMap
-from datagen.pitshapes import (CLUSTER_MAX_SEVERITY, DEFAULT_DEPTH_M, DEPTH_PROFILES, DEPTH_RANGE_M, cluster,
+from datagen.pitcluster import cluster
+from datagen.pitshapes import (CLUSTER_MAX_SEVERITY, DEFAULT_DEPTH_M, DEPTH_PROFILES, DEPTH_RANGE_M,
                                default_tolerance, ellipse, max_severity, rectangle, require_depth, sized_pit)
 from gearpit.errors import require, require_positive, require_range
 from gearpit.tomlio import check_keys
