@@ -24,6 +24,8 @@
 - ``time_stepping``    start-up transient + kept record for nonlinear / non-stationary cases
 - ``compiled_stepping``  the time-stepping loop compiled (numba); the numpy loop of ``newmark`` is its reference
 - ``dynamics``         picks the path and batches cases
+- ``batch_solve``      a simulation call's cases prepared (pits -> stiffness -> hooks 1-2 -> lumped model) and
+  solved within a memory budget for their mesh records
 - ``output_channels``, ``decimation``  channels, anti-alias filtering and decimation to fs
 - ``simulate``   THE orchestrator: Case -> Signals (CLI, datasets, comparison and tests call it)
 - ``effects/``   the effect contract and the physical effects (registry)

@@ -8,7 +8,7 @@ The cases are those of a comparison's window fit on the far helical rig of
 eccentricity as the candidate (amplitudes 10-80 um), so the record repeats only over the hunting period (1020 mesh
 cycles, 2.4 s); time-stepped as the attribution's window fits are (``AttributionSettings.search_solver``: 0.5 s
 after a 0.15 s start-up). Ours: :func:`datagen.simulate.simulate` with each case's mesh record holding only the
-cycles it rolls through (:func:`datagen.simulate.cycles_rolled`, :func:`datagen.mesh_excitation.mesh_record`).
+cycles it rolls through (:func:`datagen.batch_solve.cycles_rolled`, :func:`datagen.mesh_excitation.mesh_record`).
 Reference, measured in the same run: the same call with the whole record (``cycles_rolled`` switched off), the
 behaviour before stop 59. Also printed: how far the two runs' pinion accelerations differ (RMS of the difference
 over the RMS). Last line: JSON.
@@ -21,7 +21,7 @@ import time
 
 import numpy as np
 
-import datagen.simulate as sim
+import datagen.batch_solve as batch
 from datagen.case_options import SolverOptions
 from datagen.effects import EffectSpec
 from datagen.geometry import preset
@@ -42,15 +42,15 @@ def cases(n: int) -> list:
 
 
 def run(batch, whole: bool):
-    real = sim.cycles_rolled
+    real = batch.cycles_rolled
     if whole:
-        sim.cycles_rolled = lambda case, ctx=None: None
+        batch.cycles_rolled = lambda case, ctx=None: None
     try:
         t0 = time.perf_counter()
         out = simulate(batch, channels=["acc_pinion_loa_m_s2"])
         return out, time.perf_counter() - t0
     finally:
-        sim.cycles_rolled = real
+        batch.cycles_rolled = real
 
 
 def main(argv=None) -> None:

@@ -306,14 +306,14 @@ def test_motor_side_and_load_side_fluctuations_differ_only_in_the_mesh_torque():
 
 
 def test_time_stepped_cases_solved_in_parts_under_a_record_budget_give_the_same_bits(monkeypatch):
-    """datagen.simulate._prepare_and_solve: with RECORD_BUDGET_BYTES = 0 every time-stepped case is solved as soon
+    """datagen.batch_solve.prepare_and_solve: with RECORD_BUDGET_BYTES = 0 every time-stepped case is solved as soon
     as it is prepared (its own batch) and its record dropped; the accelerations, mesh force and transmission error
     are the same to the bit as when the cases advance as one batch, every channel within 1e-12 of its RMS (the
     wheel speed moved by one rounding, 5e-16: a batch-wide array op), and a periodic case in the list is still
     solved (at the end). The budget exists
     because a batch of hunting-period records took 15.6 GB (datagen.simulate, stop 43)."""
     import datagen.dynamics as dyn
-    import datagen.simulate as sim
+    import datagen.batch_solve as batch
     from datagen.effects import EffectSpec
 
     def case(amp, freq, grade):
@@ -330,7 +330,7 @@ def test_time_stepped_cases_solved_in_parts_under_a_record_budget_give_the_same_
     batches = []
     real_solve = dyn.solve
     monkeypatch.setattr(dyn, "solve", lambda dcs: batches.append(len(dcs)) or real_solve(dcs))
-    monkeypatch.setattr(sim, "RECORD_BUDGET_BYTES", 0)
+    monkeypatch.setattr(batch, "RECORD_BUDGET_BYTES", 0)
     apart = simulate(cases)
     assert batches == [1, 1, 1, 1]          # three time-stepped cases one by one, then the periodic one
     assert together[2].metadata["solver"]["method"] == "periodic"
@@ -344,11 +344,11 @@ def test_time_stepped_cases_solved_in_parts_under_a_record_budget_give_the_same_
 
 
 def test_a_linear_case_keeps_no_per_pair_slots_and_gives_the_same_bits(monkeypatch):
-    """datagen.simulate.prepare -> mesh_record(keep_slots=...): a case without a nonlinear mesh law keeps no per-pair
+    """datagen.batch_solve.prepare -> mesh_record(keep_slots=...): a case without a nonlinear mesh law keeps no per-pair
     stiffness and deviation (zero columns: four fifths of a record's memory), one with backlash keeps them; every
     channel of a periodic and of a time-stepped linear case (pitch error + wheel eccentricity, speed fluctuation)
     is the same to the bit as when the slots are kept."""
-    import datagen.simulate as sim
+    import datagen.batch_solve as batch
     from datagen.effects import EffectSpec
     from datagen.mesh_excitation import mesh_record
 
@@ -364,13 +364,13 @@ def test_a_linear_case_keeps_no_per_pair_slots_and_gives_the_same_bits(monkeypat
                    solver=SolverOptions(method="transient", transient_s=0.03))
     backlash = Case(pair=spur_pair_example(), operating=OperatingPoint(1500.0, 40.0), duration_s=0.05, fs_hz=10000.0,
                     effects=fx({"name": "backlash", "backlash_m": 20e-6}), solver=SolverOptions(transient_s=0.02))
-    lean = sim.prepare(stepped).record
+    lean = batch.prepare(stepped).record
     assert lean.k_slots.shape == (lean.k.size, 0) and lean.e_slots.shape == (lean.k.size, 0)
-    assert sim.prepare(backlash).record.k_slots.shape[1] >= 2
+    assert batch.prepare(backlash).record.k_slots.shape[1] >= 2
     got = simulate([periodic, stepped])
     assert got[0].metadata["solver"]["method"] == "periodic"
-    monkeypatch.setattr(sim, "mesh_record", lambda ms, effects, ctx, keep_slots=True, **kw: mesh_record(ms, effects, ctx, **kw))
-    full = sim.prepare(stepped).record
+    monkeypatch.setattr(batch, "mesh_record", lambda ms, effects, ctx, keep_slots=True, **kw: mesh_record(ms, effects, ctx, **kw))
+    full = batch.prepare(stepped).record
     assert full.k_slots.shape[1] >= 2
     assert np.array_equal(full.k, lean.k) and np.array_equal(full.error_force, lean.error_force)
     ref = simulate([periodic, stepped])

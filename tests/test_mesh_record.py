@@ -142,12 +142,12 @@ def test_a_truncated_record_holds_the_whole_records_values_at_the_cycles_it_keep
 def test_a_time_stepped_case_on_a_truncated_record_gives_the_whole_records_response(monkeypatch):
     """A time-stepped case (given start-up) whose record period exceeds its run (pitch error on both gears and a
     wheel eccentricity: spur-gds hunting period 2900 cycles, 2.9 s at 1000 rpm; run 0.05 + 0.2 s) reads a
-    truncated record (datagen.simulate.cycles_rolled). Reference: the same case on the whole record
+    truncated record (datagen.batch_solve.cycles_rolled). Reference: the same case on the whole record
     (cycles_rolled patched to None). Tolerance: 1e-4 of the RMS, for every channel; the records' means (mean
     stiffness, hence mesh damping, and the static start) are taken over the cycles held, which differ from the
     period's by a fraction of the eccentricity's modulation (measured 4e-5 of the RMS at most). And a run that
     rolls beyond its record (cycles_rolled patched to too few) raises instead of reading the wrong cycles."""
-    import datagen.simulate as sim
+    import datagen.batch_solve as batch
     from datagen.case_options import SolverOptions
     from datagen.effects import EffectSpec
     from datagen.simulate import Case, OperatingPoint, simulate
@@ -156,12 +156,12 @@ def test_a_time_stepped_case_on_a_truncated_record_gives_the_whole_records_respo
                                                           {"name": "eccentricity_wheel", "amplitude_m": 30e-6}))
     case = Case(pair=preset("spur-gds"), operating=OperatingPoint(1000.0, 50.0), duration_s=0.2, fs_hz=10000.0,
                 effects=fx, solver=SolverOptions(method="transient", transient_s=0.15))
-    assert sim.cycles_rolled(case) < 0.5 * 2900
-    cut_rec = sim.prepare(case).record
+    assert batch.cycles_rolled(case) < 0.5 * 2900
+    cut_rec = batch.prepare(case).record
     assert cut_rec.valid_cycles is not None and cut_rec.period_cycles == 2900
     got = simulate([case])[0]
     assert got.metadata["solver"]["record_cycles"] < 2900
-    monkeypatch.setattr(sim, "cycles_rolled", lambda c, ctx=None: None)
+    monkeypatch.setattr(batch, "cycles_rolled", lambda c, ctx=None: None)
     ref = simulate([case])[0]
     assert ref.metadata["solver"]["record_cycles"] == 2900
     for name, b in ref.channels.items():
@@ -170,7 +170,7 @@ def test_a_time_stepped_case_on_a_truncated_record_gives_the_whole_records_respo
         if rms > 0:
             print(name, np.sqrt(np.mean(np.square(a - b))) / rms, np.sqrt(np.mean(np.square(a - b)[-500:])) / rms)
             pass
-    monkeypatch.setattr(sim, "cycles_rolled", lambda c, ctx=None: 40)
+    monkeypatch.setattr(batch, "cycles_rolled", lambda c, ctx=None: 40)
     with pytest.raises(RuntimeError, match="rolled through mesh cycles"):
         simulate([case])
 
@@ -183,7 +183,7 @@ def test_a_speed_fluctuation_that_runs_fast_gets_a_record_long_enough():
     simulates without leaving its record, its accelerations as on the whole record to 5e-4 of their RMS."""
     import math
 
-    import datagen.simulate as sim
+    import datagen.batch_solve as batch
     from datagen.case_options import SolverOptions
     from datagen.effects import EffectSpec
     from datagen.simulate import Case, OperatingPoint, simulate
@@ -196,15 +196,15 @@ def test_a_speed_fluctuation_that_runs_fast_gets_a_record_long_enough():
                 effects=fx, solver=SolverOptions(method="transient", transient_s=0.15))
     T = 0.15 + 0.2 + 2.0 / 10000.0
     turns = 1000.0 / 60.0 * (T + 0.2 * math.sin(2 * math.pi * 0.5 * T) / (2 * math.pi * 0.5))
-    expected = sim.ROLL_FACTOR * turns * pair.pinion.teeth + sim.ROLL_SPARE_CYCLES
-    got_cycles = sim.cycles_rolled(case)
+    expected = batch.ROLL_FACTOR * turns * pair.pinion.teeth + batch.ROLL_SPARE_CYCLES
+    got_cycles = batch.cycles_rolled(case)
     assert got_cycles == pytest.approx(expected, rel=0.01)
-    assert got_cycles > 1.05 * sim.ROLL_FACTOR * T * pair.mesh_frequency_hz(1000.0)    # the nominal would be short
+    assert got_cycles > 1.05 * batch.ROLL_FACTOR * T * pair.mesh_frequency_hz(1000.0)    # the nominal would be short
     got = simulate([case])[0]
     assert got.metadata["solver"]["record_cycles"] < 2900
     monkey = pytest.MonkeyPatch()
     try:
-        monkey.setattr(sim, "cycles_rolled", lambda c, ctx=None: None)
+        monkey.setattr(batch, "cycles_rolled", lambda c, ctx=None: None)
         ref = simulate([case])[0]
     finally:
         monkey.undo()
