@@ -114,6 +114,10 @@ def document(comparison, attribution=None, ledger_rows=(), *, measurement_path: 
 
     if (note := local_fault_note(comparison, attribution)) is not None:
         doc["local_fault_note"] = note
+    from compare.caveats import claim_caveats
+
+    if caveats := claim_caveats(attribution):
+        doc["claim_caveats"] = caveats
     return json.loads(json.dumps(doc, default=_default))
 
 
@@ -297,6 +301,7 @@ def write_html(comparison, doc: dict, path: str | Path) -> Path:
         parts.append(table)
         if doc.get("local_fault_note"):
             parts.append(f"<p class=\"flag\">{html.escape(doc['local_fault_note'])}</p>")
+        parts += [f"<p class=\"flag\">{html.escape(c)}</p>" for c in doc.get("claim_caveats", [])]
         parts.append(f"<p>{att['n_simulations']} simulations in {att['elapsed_s']:.1f} s. Sigma '-' means not "
                      "identifiable from these views. An effect is claimed when it lowers the error by 30 % or more "
                      "and raises no view's error by more than 1 dB (or a quarter of its fall of the total, when "

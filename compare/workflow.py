@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from compare.candidates import Attribution, AttributionSettings, within_noise
+from compare.caveats import claim_caveats
 from compare.calibration import calibration_message
 from compare.channels import resolution_message
 from compare.comparison import Comparison, below_shafts_message, prepare_reference
@@ -279,8 +280,7 @@ def _run_locked(measurement, measurement_path, mpath: Path, *, add, plugins, att
                         "separate, which the model without backlash cannot show; the claim says the sidebands are "
                         "stronger than a fluctuation keeping the teeth in contact makes, not how large the rig's "
                         "swing is")
-    if att is not None and att.claimed and get(att.claimed[0].effect).mesh_harmonics_only:
-        messages.append(mesh_shape_caveat(att.claimed[0].effect))
+    messages += claim_caveats(att)
     row = make_row(comparison, att, run=len(rows) + 1, measurement_path=str(measurement_path))
     rows = rows + [row]
     new_rows.append(row)
@@ -302,15 +302,6 @@ def _run_locked(measurement, measurement_path, mpath: Path, *, add, plugins, att
         append_row(lpath, r)
     return Outcome(comparison=comparison, attribution=att, ledger=rows, model_path=mpath, messages=messages,
                    document=doc)
-
-
-def mesh_shape_caveat(effect: str) -> str:
-    """What a claim of an effect that changes only the mesh harmonics' levels does and does not show."""
-    return (f"{effect} acts alike on every tooth and changes only the levels of the mesh harmonics; two models of "
-            "the same healthy pair already differ there (another stiffness model, another transfer path: on the "
-            "independent simulator of tests/foreign_rig.py a healthy pair claimed a profile error), so read this "
-            "claim as 'the model's mesh excitation or its path is off' and check the fitted value against what is "
-            "known of the gear before taking it as the gear's own")
 
 
 def write_rig_files(measurement, out: str | Path, *, stem: str = "rig") -> Path:
