@@ -27,12 +27,15 @@ def mesh_shape_caveat(effect: str) -> str:
 
 def local_fault_caveat(effect: str) -> str:
     """What the fitted size of a claimed local tooth fault means (module docstring)."""
-    shape = "an ellipse on the pitch line" if effect == "tooth_pit" else "a band of the face width"
-    return (f"{effect}'s size is that of its own shape ({shape}) whose vibration is closest to the measurement, "
+    shape = ("an ellipse on the pitch line" if effect == "tooth_pit" else
+             "a band of the face width out of contact over the whole profile")
+    text = (f"{effect}'s size is that of its own shape ({shape}) whose vibration is closest to the measurement, "
             "and its 1 sigma is statistical only: a fault of another shape reads otherwise (on the suite's rig a "
             "pit cluster of 0.20 read 0.165 +/- 0.007, a strip across the face of 0.20 a tooth broken over 0.8 of "
-            "its width: experiments/pit_shape_check.py); take it as the fault's equivalent size, and put a mapped "
-            "or photographed flank into the model's [pits] table to compare it as it is")
+            "its width: experiments/pit_shape_check.py); take it as the fault's equivalent size")
+    if effect == "tooth_pit":
+        text += ", and put a mapped or photographed flank into the model's [pits] table to compare it as it is"
+    return text
 
 
 def claim_caveats(attribution) -> list[str]:

@@ -27,7 +27,7 @@ SCHEMA = {
                              "description": "present when nothing is claimed but one gear's TSA carries a local "
                                             "tooth fault's signature the model lacks, on the gear the leading "
                                             "candidate names (compare.disagreements.local_fault_note)"},
-        "claim_caveats": {"type": "array", "items": {"type": "string"},
+        "claim_caveats": {"type": "array", "items": {"type": "string"}, "minItems": 1,
                           "description": "present when the claimed effect's fitted values need a caveat: an effect "
                                          "that changes only the mesh harmonics' levels, or a local tooth fault "
                                          "whose size is its own shape's (compare.caveats)"},

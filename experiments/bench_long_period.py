@@ -21,7 +21,7 @@ import time
 
 import numpy as np
 
-import datagen.batch_solve as batch
+import datagen.batch_solve as batch_solve
 from datagen.case_options import SolverOptions
 from datagen.effects import EffectSpec
 from datagen.geometry import preset
@@ -42,15 +42,15 @@ def cases(n: int) -> list:
 
 
 def run(batch, whole: bool):
-    real = batch.cycles_rolled
+    real = batch_solve.cycles_rolled
     if whole:
-        batch.cycles_rolled = lambda case, ctx=None: None
+        batch_solve.cycles_rolled = lambda case, ctx=None: None
     try:
         t0 = time.perf_counter()
         out = simulate(batch, channels=["acc_pinion_loa_m_s2"])
         return out, time.perf_counter() - t0
     finally:
-        batch.cycles_rolled = real
+        batch_solve.cycles_rolled = real
 
 
 def main(argv=None) -> None:

@@ -15,8 +15,9 @@ from compare.refit import settle
 #: settling at stop 63, 0.146 with one tie rule of the ulp fix, and with the one kept (datagen.pitshapes
 #: TIE_BREAK_PX) the calibrated pass claims a tooth break on the same tooth (51.5 %) instead of settling, and the
 #: CLI run settles at 0.4375. Known open (README, "Model versus measurement": a pit's size is read through the
-#: ellipse's shape); kept as an expected failure, not strict: the outcome flips with pixel detail.
-FAR_RIG_PIT = pytest.mark.xfail(strict=False, reason="the far helical rig's settled pit size follows the pit's "
+#: ellipse's shape); kept as an expected failure, not strict: the outcome flips with pixel detail; only an
+#: AssertionError counts as the expected failure (an exception in the settle path or the CLI still fails the test).
+FAR_RIG_PIT = pytest.mark.xfail(strict=False, raises=AssertionError, reason="the far helical rig's settled pit size follows the pit's "
                                 "pixel shape (0.146-0.4375 for 0.2 across equivalent pit rules); open, see comment")
 
 
