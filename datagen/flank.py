@@ -104,12 +104,14 @@ class FlankGrid:
 
     @property
     def active_cols(self) -> slice:
-        """Columns of the active flank: those whose centre lies in the contact band (all with equal widths)."""
+        """Columns of the active flank: those whose centre lies in the contact band (all with equal widths); a
+        centre on the band's edge counts on both sides (to 1e-9 of a column: the last bit of a width read from a
+        file used to decide it, and on one side only)."""
         if self.contact_face_width_m >= self.face_width_m:
             return slice(0, self.n_face)
         lo, hi = self.contact_offset_m / self.dw_m, (self.contact_offset_m + self.contact_face_width_m) / self.dw_m
-        c0 = max(0, math.ceil(lo - 0.5))
-        c1 = min(self.n_face, math.floor(hi - 0.5) + 1)
+        c0 = max(0, math.ceil(lo - 0.5 - 1e-9))
+        c1 = min(self.n_face, math.floor(hi - 0.5 + 1e-9) + 1)
         return slice(c0, max(c0, c1))
 
     @property

@@ -267,7 +267,10 @@ def _centre_s(grid: FlankGrid, axis_s: float) -> float:
 #: counts in one geometry and not in the other, and a clamped ellipse's end lay exactly on a row of pixel centres.
 #: Now the centre sits this fraction of a pixel (rows, columns) off, which orders such pixels the same way in
 #: every geometry (an ulp of the positions is ~1e-12 of a pixel), and the window takes one pixel more per side.
-TIE_BREAK_PX = (1.3e-6, 0.7e-6)
+#: The two offsets are in an irrational ratio (the golden ratio): with a rational one, pixels whose distances from
+#: the centre differ by a matching step still tied (square pixels, the pitch line on a pixel edge: 13:7 tied the
+#: offsets (9.5, 13.5) and (16.5, 0.5)).
+TIE_BREAK_PX = (1.3e-6, 1.3e-6 * 2.0 / (1.0 + math.sqrt(5.0)))
 
 
 def _sized_ellipse(grid: FlankGrid, target: int, aspect: float):
@@ -317,7 +320,8 @@ def _pixel_block(grid: FlankGrid, target: int, aspect: float):
         if best is None or key < best[0]:
             best = (key, n_r, n_c)
     _, n_r, n_c = best
-    r0 = min(max(round(grid.pitch_s_m / grid.ds_m - n_r / 2), 0), grid.n_profile - n_r)
+    # half a row up on a tie (round() went to the even row, which the last bit of the pitch line decided)
+    r0 = min(max(math.floor(grid.pitch_s_m / grid.ds_m - n_r / 2 + 0.5 + 1e-9), 0), grid.n_profile - n_r)
     c0 = grid.active_cols.start + (grid.n_active_cols - n_c) // 2
     return _radius(grid, "rectangle", (r0 + n_r / 2) * grid.ds_m, (c0 + n_c / 2) * grid.dw_m,
                    n_r * grid.ds_m / 2, n_c * grid.dw_m / 2, 0.0)

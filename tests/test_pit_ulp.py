@@ -71,3 +71,46 @@ def test_the_true_pitted_model_reproduces_its_noise_free_measurement():
     model = ComparisonModel(effects=build_effects(({"name": "tooth_pit", "severity": 0.2, "gear": "pinion"},)))
     c = compare(m, model)
     assert c.error_db["total"] < 0.3, c.error_db
+
+
+def _nudged(g, eps=2.2e-16):
+    return dataclasses.replace(g, profile_length_m=g.profile_length_m * (1 + eps), pitch_s_m=g.pitch_s_m * (1 - eps))
+
+
+def test_no_exact_tie_is_left_on_square_pixels_with_the_pitch_line_on_a_pixel_edge():
+    """A review's case: square pixels, the pitch line on a pixel edge; with tie-break offsets in a rational ratio
+    (13:7) the pixels at offsets (9.5, 13.5) and (16.5, 0.5) still tied, and 32 pixels of an 850-pixel ellipse
+    moved one ulp away. The offsets' ratio is now irrational."""
+    from datagen.flank import FlankGrid
+
+    g = FlankGrid(64, 64, 0.0064, 0.0064, 0.0032)
+    for sev in (850 / 4096, 0.1, 0.2, 0.3):
+        a = make_pit_map(g, shape="ellipse", severity=sev, teeth=[0], aspect_w_to_s=1.0).depth_m[0]
+        b = make_pit_map(_nudged(g), shape="ellipse", severity=sev, teeth=[0], aspect_w_to_s=1.0).depth_m[0]
+        assert np.array_equal(a > 0, b > 0), sev
+
+
+def test_a_rectangle_on_a_pitch_line_at_a_pixel_edge_stays_put():
+    """An odd row count centred on a pitch line that lies on a pixel edge sits half a row off either way;
+    round() chose by the last bit of the pitch line (banker's rounding of x.5)."""
+    from datagen.flank import FlankGrid
+
+    g = FlankGrid(64, 64, 0.0064, 0.0064, 0.0032)
+    for sev in (0.05, 0.1, 0.15, 0.2, 0.25, 0.3):
+        for eps in (2.2e-16, -2.2e-16):
+            a = make_pit_map(g, shape="rectangle", severity=sev, teeth=[0]).depth_m[0]
+            b = make_pit_map(_nudged(g, eps), shape="rectangle", severity=sev, teeth=[0]).depth_m[0]
+            assert np.array_equal(a > 0, b > 0), (sev, eps)
+
+
+@pytest.mark.parametrize("n_face", [10, 30, 50])
+def test_a_column_centred_on_the_contact_band_edge_counts_on_both_sides(n_face):
+    """A contact width read from a file (18 mm -> 0.018000000000000002 m) put the edge columns in or out by its
+    last bit, and on one side only (columns 1-9 of 10 against 0-9)."""
+    from datagen.flank import FlankGrid
+
+    cols = {(c.start, c.stop) for c in (FlankGrid(40, n_face, 0.005, 0.02, 0.002, w).active_cols
+                                         for w in (0.018, 18 * 1e-3, 0.018 * (1 - 2e-16)))}
+    assert len(cols) == 1, cols
+    ((start, stop),) = cols
+    assert start == n_face - stop           # symmetric about the face's centre, as the band is
