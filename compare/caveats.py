@@ -4,9 +4,9 @@
   changes only the mesh harmonics' levels, where two models of one healthy pair already differ;
 - a local tooth fault (:data:`LOCAL_FAULT_EFFECTS`) is fitted in one fixed shape, so its size is that shape's:
   ``experiments/pit_shape_check.py`` measured, on the suite's rig, pits given as maps of other shapes read as the
-  effect's ellipse (a cluster of 0.20 at 0.165 +/- 0.006, a strip across the face of 0.20 as a tooth broken over
-  0.8 of its width), and the 1-sigma of the fit is statistical only (the truth lies 2-6 sigma away even for
-  ellipses).
+  effect's ellipse (a cluster of 0.20 at 0.165 +/- 0.007, a strip across the face of 0.20 as a tooth broken over
+  0.8 of its width), and the 1-sigma of the fit is statistical only (the truth lay 3-6 sigma away even for
+  ellipses, the fit staying on the search's 1/12 ladder).
 """
 from __future__ import annotations
 
@@ -31,7 +31,7 @@ def local_fault_caveat(effect: str) -> str:
              "a band of the face width out of contact over the whole profile")
     text = (f"{effect}'s size is that of its own shape ({shape}) whose vibration is closest to the measurement, "
             "and its 1 sigma is statistical only: a fault of another shape reads otherwise (on the suite's rig a "
-            "pit cluster of 0.20 read 0.165 +/- 0.006, a strip across the face of 0.20 a tooth broken over 0.8 of "
+            "pit cluster of 0.20 read 0.165 +/- 0.007, a strip across the face of 0.20 a tooth broken over 0.8 of "
             "its width: experiments/pit_shape_check.py); take it as the fault's equivalent size")
     if effect == "tooth_pit":
         text += ", and put a mapped or photographed flank into the model's [pits] table to compare it as it is"

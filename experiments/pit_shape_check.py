@@ -18,31 +18,30 @@ a strip across almost the whole face), compared with the bare model (``Compariso
 candidate's fitted severity and 1-sigma, the true severity, and the pitted tooth's mesh-stiffness loss (its
 integral over the mesh cycles, proportional to the pitted area on a spur pair, and its largest value).
 
-Measured 2026-12-05 (HEAD 834cdf7, with the fit's round E; seed 3; 42-56 s per case on 2 cores beside CI):
+Measured 2026-12-05 (HEAD 5d22ad4, seed 3; 29-106 s per case beside other work):
 
 ============  ============================  ==========================  ==============================
 true pit      claimed                       tooth_pit fit (+/- sigma)   stiffness loss: sum / largest
 ============  ============================  ==========================  ==============================
-ellipse 0.10  tooth_pit                     0.092 +/- 0.003             1.07e10 / 8.4e7 N/m
-ellipse 0.20  tooth_pit                     0.196 +/- 0.004             2.13e10 / 1.22e8
-ellipse 0.30  tooth_pit                     0.333 +/- 0.004             3.20e10 / 1.52e8
+ellipse 0.10  tooth_pit                     0.083 +/- 0.003             1.07e10 / 8.4e7 N/m
+ellipse 0.20  tooth_pit                     0.192 +/- 0.005             2.13e10 / 1.22e8
+ellipse 0.30  tooth_pit                     0.333 +/- 0.008             3.20e10 / 1.52e8
 cluster 0.10  tooth_pit                     0.083 +/- 0.004             1.10e10 / 7.6e7
-cluster 0.20  tooth_pit                     0.165 +/- 0.006             2.17e10 / 1.25e8
-cluster 0.30  tooth_pit                     0.328 +/- 0.008             3.24e10 / 1.71e8
+cluster 0.20  tooth_pit                     0.165 +/- 0.007             2.17e10 / 1.25e8
+cluster 0.30  tooth_pit                     0.333 +/- 0.013             3.24e10 / 1.71e8
 strip 0.10    tooth_breakage, width 0.80    0.500 (its bound)           1.08e10 / 2.25e8
 strip 0.20    tooth_breakage, width 0.80    0.500 (its bound)           2.13e10 / 2.40e8
-rect. 0.30    tooth_pit                     0.262 +/- 0.008             3.18e10 / 1.33e8
+rect. 0.30    tooth_pit                     0.262 +/- 0.005             3.18e10 / 1.33e8
 ============  ============================  ==========================  ==============================
 
-("strip": the rectangle of 0.1 and 0.2 in the flank's proportions is a band over 97 % of the face.) Before the
-fit's round E (HEAD 5d22ad4) the ellipses read 0.083 / 0.192 / 0.333 and the cluster of 0.30 0.333: the fit kept
-points of its 1/12 ladder. The 1-sigma, from the curvature of the error at the best point, is a statistical figure
-that leaves the shape out: the truth lies 2-6 sigma away even for ellipses. A pit's area does not set its
-vibration: the stiffness loss summed over the mesh is the pitted area's on a spur pair (the same for the three
-shapes at 0.2), its largest value is not (the strip takes the whole pair's width out of contact over 20 % of the
-profile, twice what the ellipse does), and a pair's transmission error grows with its compliance, so the strip is
-read as a broken tooth. The severity a comparison reports is the size of the effect's ellipse whose vibration is
-closest, to within the shape's own difference.
+("strip": the rectangle of 0.1 and 0.2 in the flank's proportions is a band over 97 % of the face.) Even the
+right shape is read on the search's 1/12 ladder unless a finer point wins (0.083 for 0.1, 0.333 for 0.3), and the
+1-sigma, from the curvature of the error at the best point, is a statistical figure that leaves the shape out: the
+truth lies 3-6 sigma away. A pit's area does not set its vibration: the stiffness loss summed over the mesh is the
+pitted area's on a spur pair (the same for the three shapes at 0.2), its largest value is not (the strip takes
+the whole pair's width out of contact over 20 % of the profile, twice what the ellipse does), and a pair's
+transmission error grows with its compliance, so the strip is read as a broken tooth. The severity a comparison
+reports is the size of the effect's ellipse whose vibration is closest, to within the shape's own difference.
 """
 from __future__ import annotations
 
