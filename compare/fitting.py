@@ -16,9 +16,7 @@ rounds (:mod:`compare.search`; time-stepped effects skip round C and get a riche
 3. round C - steps of a third of the grid spacing around the best in every
    parameter;
 4. round D - the minimum of a quadratic surrogate of ``E^2`` fitted to the
-   points near the best (:func:`scipy.optimize.minimize`, bounded), evaluated;
-5. round E (periodic effects) - along each parameter, the vertex of the parabola
-   through the best and its nearest neighbours on either side, evaluated.
+   points near the best (:func:`scipy.optimize.minimize`, bounded), evaluated.
 
 Every round is one :func:`datagen.simulate.simulate` call for all effects
 together (two when some effects need time stepping: those are simulated on a
@@ -63,7 +61,7 @@ from compare.candidates import CandidateResult
 from compare.comparison import NOISE_DRAWS, Reference, evaluate, prepare_reference, simulate_model
 from compare.fitspace import fit_space, operating_seeds
 from compare.search import (Search, Trial, around_basins, line_sigma_u, quadratic, round_a, round_b, round_c,
-                            round_b_frequency, round_d, round_e, round_fine, surrogate_sigma_u)
+                            round_b_frequency, round_d, round_fine, surrogate_sigma_u)
 from gearpit.errors import GearpitError, require
 
 
@@ -166,7 +164,7 @@ def search_group(names_: list, ref: Reference, model, settings, transient: bool,
     # for effects that already explain a part of the window (a contact-loss batch is not cheap: ~15 s for
     # backlash), the others' fits end with the surrogate step
     rounds = ([lambda s, best=None: round_b(s, rich=True, best=best), round_b_frequency, round_fine, round_fine,
-               round_d] if transient else [round_b, round_c, round_d, round_e])
+               round_d] if transient else [round_b, round_c, round_d])
     for make in rounds:
         active = searches
         if transient and make is round_fine:

@@ -20,9 +20,7 @@ batch, so a round costs one :func:`datagen.simulate.simulate` call. Rounds:
   gap to the nearest value tried in its basin);
 - :func:`round_d`: the minimum of :func:`quadratic`, a least-squares quadratic
   surrogate of ``E^2`` over the points nearest the best, minimised within the
-  bounds by :func:`scipy.optimize.minimize` (L-BFGS-B);
-- :func:`round_e` (periodic fits): along each parameter, the vertex of the
-  parabola through the best and its nearest neighbours on either side.
+  bounds by :func:`scipy.optimize.minimize` (L-BFGS-B).
 
 After round A the :data:`MAX_BASINS` lowest local minima of its sweep of the
 first parameter (of a frequency: the best clusters of values) are kept
@@ -341,41 +339,6 @@ def round_d(s: Search, best: Trial | None = None) -> list[Trial]:
     u = q[0]
     t = s.point({p.name: float(p.from_u(u[j])) for j, p in enumerate(s.space.params)}, best.choice)
     return [] if s.seen(t) else [t]
-
-
-def round_e(s: Search, best: Trial | None = None) -> list[Trial]:
-    """The vertex of the parabola in ``E^2`` through ``best`` (default: the best trial) and its nearest tried
-    neighbours on either side along each parameter (the others and the choice as at ``best``, same basin;
-    Numerical Recipes eq. 10.2.1, :func:`compare.calibration_points.scan_vertex`), where they bracket it.
-
-    Why: the surrogate of :func:`round_d` is a least-squares quadratic over the points near the best, which a
-    landscape that is not a parabola that far out pulls aside; the fit then kept a grid point. Measured
-    (``experiments/pit_shape_check.py``, the suite's rig with an elliptical pit of 0.10): the grid's 0.083 gave
-    0.819 dB, its neighbours 0.0625 and 0.104 1.355 and 0.896 dB, the surrogate's 0.1045 0.902 dB; the three-point
-    vertex lies at 0.092."""
-    from compare.calibration_points import scan_vertex
-
-    ps, best = s.space.params, best or s.best
-    if best is None or not ps:
-        return []
-    home = s.basin_of(best)
-    out = []
-    for j, p in enumerate(ps):
-        others = [i for i in range(len(ps)) if i != j]
-        line = [t for t in s.trials if math.isfinite(t.error_db) and t.choice == best.choice
-                and s.basin_of(t) == home and np.allclose(t.u[others], best.u[others], atol=1e-6)]
-        below = [t for t in line if t.u[j] < best.u[j] - 1e-6]
-        above = [t for t in line if t.u[j] > best.u[j] + 1e-6]
-        if not below or not above:
-            continue
-        scan = [max(below, key=lambda t: t.u[j]), best, min(above, key=lambda t: t.u[j])]
-        x = scan_vertex(scan, j, float(best.u[j]))
-        if abs(x - best.u[j]) < 1e-6:
-            continue
-        u = best.u.copy()
-        u[j] = x
-        out.append(s.point({q.name: float(q.from_u(u[i])) for i, q in enumerate(ps)}, best.choice))
-    return [t for t in out if not s.seen(t)]
 
 
 def around_basins(make, s: Search) -> list[Trial]:

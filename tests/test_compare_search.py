@@ -348,30 +348,3 @@ def test_frequency_ladder_spans_the_window_resolution_in_steps_of_the_record():
     # near the lower bound only the values inside it
     low = frequency_ladder(space, {"frequency_hz": 0.3, "amplitude_fraction": 0.01}, 2.0, 0.621)
     assert all(p["frequency_hz"] >= 0.0 for p in low) and len(low) == LADDER_STEPS + 1
-
-
-def test_round_e_proposes_the_vertex_its_neighbours_bracket_where_round_d_is_pulled_aside():
-    """The pit's case (experiments/pit_shape_check.py, an ellipse of 0.10 on the suite's rig): the trials of
-    rounds A-C as measured there (severity 0.0417-0.2083, the best the grid's 0.0833), but with E^2 an exact
-    parabola through the best and its two neighbours (minimum at 0.092) and the points further out as measured,
-    higher than that parabola. Round D's least-squares surrogate over the nearest points is pulled aside by them;
-    round E proposes the three-point vertex (Numerical Recipes eq. 10.2.1), exact for a parabola."""
-    from compare.search import round_e
-
-    p = FitParameter("severity", 0.0, 0.5, "-", 0.2, False)
-    s = Search(None, FitSpace("stand_in", (p,), None, False), None)
-    s.choice = None
-    parabola = {0.0625: None, 0.0833: None, 0.1042: None}
-    measured = {0.0417: 2.143, 0.125: 0.995, 0.1667: 2.035, 0.2083: 2.378, 0.2917: 3.597}
-    for sev in sorted({**parabola, **measured}):
-        t = s.point({"severity": sev})
-        t.error_db = math.sqrt(0.2 + 100.0 * (sev - 0.092) ** 2) if sev in parabola else measured[sev]
-        s.trials.append(t)
-    assert s.best.values["severity"] == 0.0833
-    (e,) = round_e(s)
-    assert abs(e.values["severity"] - 0.092) < 1e-9, e.values
-    (d,) = round_d(s)
-    assert abs(d.values["severity"] - 0.092) > 0.005, d.values     # the surrogate alone would not get there
-    e.error_db = math.sqrt(0.2)
-    s.trials.append(e)
-    assert round_e(s) == []                  # at the vertex: nothing further to propose
