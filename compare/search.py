@@ -10,7 +10,10 @@ batch, so a round costs one :func:`datagen.simulate.simulate` call. Rounds:
   measurement points to, for a parameter in Hz, and the midpoints of close
   neighbours among them: :func:`between_seeds`), plus the values the effect's
   physics singles out at this operating point (its ``fit_seeds``); the second
-  at its default, or at three values when the first is a frequency;
+  at its default, or at three values when the first is a frequency; at every
+  value of the string option for an effect whose option moves its lines
+  (``fit_choice_grid``: which gear carries a local tooth fault), else at its
+  default;
 - :func:`round_b`: the second parameter's grid at the best first one (``rich``:
   nine values, crossed with steps of a first that is not a frequency), or a
   finer bracket of a lone parameter; the string option's other values;
@@ -158,14 +161,19 @@ def round_a(s: Search, ref_residual, ref) -> list[Trial]:
     second = [None]
     if len(ps) > 1:
         second = list(grid(ps[1], 3)) if p0.unit == "Hz" else [ps[1].default]
+    # an option that moves the lines (a local fault's gear) gets the sweep at each value: tried only at the
+    # default's best point, a wheel pit of 0.3 (helical-dct, 1200 rpm) was tried at the best pinion pit, the
+    # smallest of the grid (a pinion pit explains nothing there), and refined around it to 0.0625
+    choices = list(s.space.choice[1]) if s.space.choice and getattr(s.cls, "fit_choice_grid", False) else [None]
     out = []
-    for v0 in first:
-        for v1 in second:
-            vals = s.defaults()
-            vals[p0.name] = float(v0)
-            if v1 is not None:
-                vals[ps[1].name] = float(v1)
-            out.append(s.point(vals))
+    for c in choices:
+        for v0 in first:
+            for v1 in second:
+                vals = s.defaults()
+                vals[p0.name] = float(v0)
+                if v1 is not None:
+                    vals[ps[1].name] = float(v1)
+                out.append(s.point(vals, c))
     return out
 
 

@@ -18,7 +18,12 @@ active.
 
 A pit map holds, per pitted tooth, the pit depth (m) of every pixel; 0 means
 intact. Depth matters to the stiffness (section loss), the boolean mask to the
-contact.
+contact. A map may also say which share of a pitted pixel's area the pit covers
+(``coverage``: a pit outline drawn with sub-pixel edges, :func:`datagen.pitshapes.subpixel_pit`);
+a pixel without one is pitted over its whole area. The severity then counts each
+pixel by its share, and the contact of a partly pitted pixel keeps its intact
+share (:mod:`datagen.pit_stiffness`), so a pit's record moves continuously with
+its size instead of in whole-pixel steps.
 """
 from __future__ import annotations
 
@@ -151,11 +156,15 @@ class PitMap:
         Teeth are numbered in the order they come into mesh, tooth 0 first.
     gear : {"pinion", "wheel"}
         Which gear carries the pits.
+    coverage : dict[int, ndarray], optional
+        Tooth -> pitted share of each pixel's area, in (0, 1] where the depth is > 0 and 0 elsewhere (sub-pixel
+        pit edges); a tooth without an entry is pitted over the whole area of its pitted pixels.
     """
 
     grid: FlankGrid
     depth_m: dict[int, np.ndarray] = field(default_factory=dict)
     gear: str = "pinion"
+    coverage: dict[int, np.ndarray] = field(default_factory=dict)
 
     def __post_init__(self):
         require(self.gear in GEARS, "pits.gear", self.gear, "one of: pinion, wheel")
@@ -169,6 +178,19 @@ class PitMap:
                     "negative or non-finite values", "finite depths >= 0 m")
             clean[int(tooth)] = arr
         object.__setattr__(self, "depth_m", clean)
+        shares = {}
+        for tooth, c in self.coverage.items():
+            require(tooth in clean, "pits.coverage.tooth", tooth, f"a tooth of depth_m ({sorted(clean)})")
+            arr = np.asarray(c, dtype=np.float64)
+            if arr.shape != self.grid.shape:
+                raise InputError(f"pits.coverage[{tooth}].shape", arr.shape, f"the flank grid shape {self.grid.shape}")
+            pitted = clean[int(tooth)] > 0
+            ok = (bool(np.all(np.isfinite(arr))) and bool(np.all(arr[~pitted] == 0.0))
+                  and bool(np.all((arr[pitted] > 0.0) & (arr[pitted] <= 1.0))))
+            require(ok, f"pits.coverage[{tooth}]", "shares outside their range",
+                    "a share in (0, 1] on every pixel with a depth > 0, and 0 on the others")
+            shares[int(tooth)] = arr
+        object.__setattr__(self, "coverage", shares)
 
     @property
     def pitted_teeth(self) -> list[int]:
@@ -180,9 +202,17 @@ class PitMap:
         d = self.depth_m.get(tooth)
         return np.zeros(self.grid.shape, bool) if d is None else d > 0
 
+    def share(self, tooth: int) -> np.ndarray:
+        """Pitted share of each pixel's area of one tooth (the mask as 0/1 where the map has no coverage)."""
+        c = self.coverage.get(tooth)
+        return self.mask(tooth).astype(np.float64) if c is None else c
+
     def severity(self, tooth: int) -> float:
-        """Pitted area / active flank area of one tooth (pits outside the contact band do not count)."""
-        return float(self.grid.severity_of(self.mask(tooth)))
+        """Pitted area / active flank area of one tooth (pits outside the contact band do not count; a partly
+        pitted pixel counts by its share)."""
+        if tooth not in self.coverage:
+            return float(self.grid.severity_of(self.mask(tooth)))
+        return float(self.coverage[tooth][:, self.grid.active_cols].sum() / self.grid.n_active_pixels)
 
     def severities(self) -> dict[int, float]:
         return {t: self.severity(t) for t in self.pitted_teeth}

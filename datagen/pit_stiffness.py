@@ -6,8 +6,9 @@ recomputes the slices of the pitted engagements only (PHYSICS.md section 3):
 
 - Pits (``pit_model="no_contact"``, default): a pitted pixel on the contact line
   carries no load (a 0.1-0.2 mm deep pit does not close under load), so that
-  slice of that pair drops out while it is there; in addition the material the
-  pits remove lowers the section (area, second moment) of that slice for every
+  slice of that pair drops out while it is there (a pixel a pit covers only in
+  part, :attr:`datagen.flank.PitMap.coverage`, keeps its intact share of that
+  stiffness); in addition the material the pits remove lowers the section (area, second moment) of that slice for every
   load point above them (Ma et al. 2015; Chen & Shao 2011).
   ``pit_model="weak_spring"`` is the spur paper's "weak spring": a pitted pixel
   stays loaded, its contact spring weakened to :data:`WEAK_SPRING_RATIO` of the
@@ -81,15 +82,21 @@ def normalise_pits(pair, pits) -> tuple[PitMap, ...]:
 
 @dataclass(frozen=True, eq=False)
 class _PitGeometry:
-    """Per pitted tooth: cumulative section loss (rows+1, cols) and the pixel mask."""
+    """Per pitted tooth: cumulative section loss (rows+1, cols) and the pitted share of each pixel."""
 
-    depth: np.ndarray
+    share: np.ndarray
     dW: np.ndarray   # (3, rows+1, cols)
     dA0: np.ndarray  # (rows+1, cols)
 
 
-def _section_loss(pair, beam: ToothBeam, which: str, depth: np.ndarray, grid) -> _PitGeometry:
-    """Cumulative W_n, A_0 increments that the pits of one tooth cause, row by row from the SAP up."""
+def _section_loss(pair, beam: ToothBeam, which: str, depth: np.ndarray, grid, share: np.ndarray | None = None
+                  ) -> _PitGeometry:
+    """Cumulative W_n, A_0 increments that the pits of one tooth cause, row by row from the SAP up. ``share``:
+    the pitted share of each pixel (default: 1 where the depth is > 0); a partly pitted pixel removes that share
+    of its depth's material (its depth times its share, as a thinner section)."""
+    if share is None:
+        share = (depth > 0).astype(np.float64)
+    depth = depth * share
     rb = beam.base_radius_m
     t_sap, _ = pair.active_roll_range_rad(which)
     s_edges = np.arange(grid.n_profile + 1) * grid.ds_m
@@ -110,7 +117,7 @@ def _section_loss(pair, beam: ToothBeam, which: str, depth: np.ndarray, grid) ->
         dW[n, 1:] = np.cumsum(d_inv_i * (z_mid**n * dy)[:, None], axis=0)
     dA0 = np.zeros((grid.n_profile + 1, grid.n_face))
     dA0[1:] = np.cumsum(d_inv_a * dy[:, None], axis=0)
-    return _PitGeometry(depth=depth, dW=dW, dA0=dA0)
+    return _PitGeometry(share=share, dW=dW, dA0=dA0)
 
 
 def slice_pieces(w_slices, dw: float, grids_offsets) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -162,7 +169,7 @@ def pit_overrides(pair, pc: PairCompliance, maps, P: int, g_cycle, dw: float, w_
         cols = piece_cols[i]
         geo = {}
         for t in pm.pitted_teeth:
-            pg = _section_loss(pair, beam, pm.gear, pm.depth_m[t], pm.grid)
+            pg = _section_loss(pair, beam, pm.gear, pm.depth_m[t], pm.grid, pm.share(t))
             # the pieces whose face column holds a pit somewhere: on the others the section increments are exact
             # zeros, so the bending, shear and axial terms add +0.0 and the compliance is the healthy one
             touched = ((pg.dW != 0.0).any(axis=(0, 1)) | (pg.dA0 != 0.0).any(axis=0))[cols]
@@ -195,7 +202,7 @@ def pit_overrides(pair, pc: PairCompliance, maps, P: int, g_cycle, dw: float, w_
         intact_share[np.abs(intact_share) < 1e-9] = 0.0
         for s, (contact, g0, comp_healthy, g_pit) in slots.items():
             comp = comp_healthy[:, psl]
-            pitted_here = np.zeros(comp.shape, bool)
+            intact_here = np.ones(comp.shape)          # share of the piece's contact no pit covers
             for gear, (pm, beam, cols, geo) in per_gear.items():
                 tooth = m % z[gear]
                 if tooth not in geo:
@@ -206,17 +213,17 @@ def pit_overrides(pair, pc: PairCompliance, maps, P: int, g_cycle, dw: float, w_
                 s_arc = beam.base_radius_m * (roll**2 - t_sap**2) / 2.0
                 rows = np.clip((s_arc / pm.grid.ds_m).astype(np.int64), 0, pm.grid.n_profile - 1)
                 rows, colg = np.broadcast_arrays(rows, cols[sel][None, :])
-                pitted_here |= pg.depth[rows, colg] > 0
+                intact_here = intact_here * (1.0 - pg.share[rows, colg])
                 a1, Y, h = beam.load_point(roll)
                 W = pg.dW[:, rows, colg]
                 b, sh, ax = beam_compliance(a1, Y, h, W, pg.dA0[rows, colg], E, G)
                 comp = comp + b + sh + ax
             in_contact = contact[:, psl]
             if pit_model == "no_contact":
-                k_piece = np.where(in_contact & ~pitted_here, dw / comp, 0.0)
+                k_piece = np.where(in_contact, intact_here * dw / comp, 0.0)
             else:
-                comp = np.where(pitted_here, comp + pc.c_hertz * (1.0 / WEAK_SPRING_RATIO - 1.0), comp)
-                k_piece = np.where(in_contact, dw / comp, 0.0)
+                weak = comp + pc.c_hertz * (1.0 / WEAK_SPRING_RATIO - 1.0)
+                k_piece = np.where(in_contact, intact_here * dw / comp + (1.0 - intact_here) * dw / weak, 0.0)
             k = np.where(contact, dw / comp_healthy, 0.0) * intact_share[None, :]
             np.add.at(k, (slice(None), psl), share[None, :] * k_piece)
             out[(m, s)] = k
@@ -241,13 +248,13 @@ def pixel_stiffness_map(pair, pit_map: PitMap, tooth: int, *, pit_model: str = "
         g = pair.line_of_action_length_m - roll * beam.base_radius_m
     comp = np.repeat(pc(g)[:, None], grid.n_face, axis=1)
     depth = pit_map.depth_m.get(tooth, np.zeros(grid.shape))
-    pg = _section_loss(pair, beam, pit_map.gear, depth, grid)
+    share = pit_map.share(tooth)
+    pg = _section_loss(pair, beam, pit_map.gear, depth, grid, share)
     a1, Y, h = beam.load_point(roll)
     rows = np.arange(grid.n_profile)
     b, sh, ax = beam_compliance(a1[:, None], Y[:, None], h[:, None], pg.dW[:, rows, :], pg.dA0[rows, :],
                                 pair.material.youngs_modulus_pa, pair.material.shear_modulus_pa)
     comp = comp + b + sh + ax
-    pitted = depth > 0
     if pit_model == "no_contact":
-        return np.where(pitted, 0.0, grid.dw_m / comp)
-    return grid.dw_m / np.where(pitted, comp + pc.c_hertz * (1.0 / WEAK_SPRING_RATIO - 1.0), comp)
+        return (1.0 - share) * grid.dw_m / comp
+    return (1.0 - share) * grid.dw_m / comp + share * grid.dw_m / (comp + pc.c_hertz * (1.0 / WEAK_SPRING_RATIO - 1.0))

@@ -140,6 +140,8 @@ def save_pit_pngs(pit_map: PitMap, directory: str | Path, *, pair_name: str | No
     sidecar :data:`PNG_SIDECAR` (JSON: ``pair_name`` if given, the gear, and the grid: ``n_profile``, ``n_face``,
     ``profile_length_m``, ``face_width_m``, ``pitch_s_m``, ``contact_face_width_m``, ``ds_m``, ``dw_m``), which
     :func:`load_pit_pngs` checks. Returns the tooth PNGs' paths."""
+    require(not pit_map.coverage, "pits.coverage", f"sub-pixel shares on teeth {sorted(pit_map.coverage)}",
+            "none: a depth PNG holds whole pixels only; write a map with sub-pixel outlines with save_npz")
     out = Path(directory)
     paths = [write_depth_png(out / tooth_png_name(t), d) for t, d in sorted(pit_map.depth_m.items())]
     out.mkdir(parents=True, exist_ok=True)
@@ -205,7 +207,8 @@ def load_pit_pngs(directory: str | Path, grid: FlankGrid, *, gear: str | None = 
 
 
 def save_npz(pit_map: PitMap, path: str | Path) -> Path:
-    """Write a pit map with its grid to a compressed NPZ archive (exact round trip)."""
+    """Write a pit map with its grid to a compressed NPZ archive (exact round trip; the sub-pixel shares of
+    :attr:`datagen.flank.PitMap.coverage`, when the map has them, as ``coverage_teeth`` and ``coverage``)."""
     teeth = sorted(pit_map.depth_m)
     g = pit_map.grid
     stack = (np.stack([pit_map.depth_m[t] for t in teeth]) if teeth
@@ -218,8 +221,16 @@ def save_npz(pit_map: PitMap, path: str | Path) -> Path:
                                 face_width_m=np.float64(g.face_width_m), pitch_s_m=np.float64(g.pitch_s_m),
                                 contact_face_width_m=np.float64(g.contact_face_width_m),
                                 gear=np.array(pit_map.gear), teeth=np.asarray(teeth, dtype=np.int64),
-                                depth_m=stack.astype(np.float64))
+                                depth_m=stack.astype(np.float64), **_coverage_arrays(pit_map))
     return target
+
+
+def _coverage_arrays(pit_map: PitMap) -> dict:
+    if not pit_map.coverage:
+        return {}
+    teeth = sorted(pit_map.coverage)
+    return {"coverage_teeth": np.asarray(teeth, dtype=np.int64),
+            "coverage": np.stack([pit_map.coverage[t] for t in teeth]).astype(np.float64)}
 
 
 def _npz_scalar(data: dict, key: str, name: str, kind: str):
@@ -296,4 +307,12 @@ def load_npz(path: str | Path) -> PitMap:
         deepest = float(np.max(depth[i], initial=0.0))
         if deepest > 0:     # the same range every other entry point enforces (PNGs, masks, photos, pit tables)
             require_depth(f"npz.depth_m (tooth {t}, deepest pixel)", deepest)
-    return PitMap(grid=grid, depth_m={t: depth[i] for i, t in enumerate(teeth)}, gear=gear)
+    coverage = {}
+    if "coverage_teeth" in data or "coverage" in data:
+        require("coverage_teeth" in data and "coverage" in data, "npz.coverage", sorted(data),
+                "both coverage_teeth and coverage, or neither")
+        c_teeth, c = _npz_teeth(data["coverage_teeth"]), data["coverage"]
+        if c.shape != (len(c_teeth),) + grid.shape:
+            raise InputError("npz.coverage.shape", c.shape, f"{(len(c_teeth),) + grid.shape} (teeth, rows, columns)")
+        coverage = {t: c[i] for i, t in enumerate(c_teeth)}
+    return PitMap(grid=grid, depth_m={t: depth[i] for i, t in enumerate(teeth)}, gear=gear, coverage=coverage)

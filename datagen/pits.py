@@ -29,7 +29,8 @@ import numpy as np
 from datagen.flank import FlankGrid, PitMap
 from datagen.pitcluster import cluster
 from datagen.pitshapes import (CLUSTER_MAX_SEVERITY, DEFAULT_DEPTH_M, DEPTH_PROFILES, DEPTH_RANGE_M,
-                               default_tolerance, ellipse, max_severity, rectangle, require_depth, sized_pit)
+                               default_tolerance, ellipse, max_severity, rectangle, require_depth, sized_pit,
+                               subpixel_pit)
 from gearpit.errors import require, require_positive, require_range
 from gearpit.tomlio import check_keys
 
@@ -53,7 +54,8 @@ def make_pit_map(grid: FlankGrid, *, shape: str, severity: float | Mapping[int, 
                  teeth: Sequence[int] | None = None, gear: str = "pinion", seed: int = 0,
                  depth_m: float = DEFAULT_DEPTH_M, tolerance: float | None = None,
                  aspect_w_to_s: float | None = None, profile: str = "flat",
-                 pit_diameter_m: float | None = None, spread_s_m: float | None = None) -> PitMap:
+                 pit_diameter_m: float | None = None, spread_s_m: float | None = None,
+                 subpixel: bool = False) -> PitMap:
     """Pits of one shape family on a set of teeth, each at a requested severity.
 
     Parameters
@@ -83,6 +85,10 @@ def make_pit_map(grid: FlankGrid, *, shape: str, severity: float | Mapping[int, 
         Depth profile of every pit.
     pit_diameter_m, spread_s_m : float, optional
         Cluster pit size and spread about the pitch line (m), see :func:`cluster`.
+    subpixel : bool
+        Ellipses and rectangles with their outline at sub-pixel resolution (:func:`subpixel_pit`: sized by area,
+        each pixel pitted over the share the outline covers, the map's ``coverage``), so that the record moves
+        continuously with the severity; default False (whole pixels, :func:`sized_pit`). Not for clusters.
 
     Raises
     ------
@@ -99,16 +105,24 @@ def make_pit_map(grid: FlankGrid, *, shape: str, severity: float | Mapping[int, 
                                                                             f"largest {shape} that fits this flank")
     for tooth, sev in per_tooth.items():
         require(0.0 <= sev <= hi, f"pits.severity[tooth {tooth}]", sev, f"a number in [0, {hi:.4f}] ({why})")
-    depth = {}
+    require(subpixel in (True, False), "pits.subpixel", subpixel, "true or false")
+    require(not (subpixel and shape == "cluster"), "pits.subpixel", subpixel,
+            "false for clusters (sub-pixel outlines are drawn for ellipses and rectangles)")
+    depth, coverage = {}, {}
     for tooth, sev in per_tooth.items():
-        if shape == "cluster":
+        if subpixel:
+            d, c = subpixel_pit(grid, shape=shape, severity=min(sev, top), depth_m=depth_m, aspect_w_to_s=aspect_w_to_s,
+                                profile=profile)
+            if np.any(d > 0):
+                depth[tooth], coverage[tooth] = d, c
+        elif shape == "cluster":
             depth[tooth] = cluster(grid, target_severity=sev, rng=tooth_rng(seed, tooth), depth_m=depth_m,
                                    tolerance=tol, pit_diameter_m=pit_diameter_m, spread_s_m=spread_s_m,
                                    profile=profile)
         else:
             depth[tooth] = sized_pit(grid, shape=shape, severity=sev, depth_m=depth_m,
                                      aspect_w_to_s=aspect_w_to_s, profile=profile, tolerance=tol)
-    return PitMap(grid=grid, depth_m=depth, gear=gear)
+    return PitMap(grid=grid, depth_m=depth, gear=gear, coverage=coverage)
 
 
 def _check_options(seed, depth_m, tolerance, aspect_w_to_s, profile, pit_diameter_m, spread_s_m) -> None:
@@ -154,7 +168,8 @@ def _per_tooth_severity(severity, teeth) -> dict[int, float]:
 TOML_KEYS = {"shape": ("shape", None), "teeth": ("teeth", None), "severity": ("severity", None),
              "depth_mm": ("depth_m", 1e-3), "seed": ("seed", None), "aspect_w_to_s": ("aspect_w_to_s", None),
              "tolerance": ("tolerance", None), "profile": ("profile", None),
-             "pit_diameter_mm": ("pit_diameter_m", 1e-3), "spread_s_mm": ("spread_s_m", 1e-3)}
+             "pit_diameter_mm": ("pit_diameter_m", 1e-3), "spread_s_mm": ("spread_s_m", 1e-3),
+             "subpixel": ("subpixel", None)}
 
 
 @dataclass(frozen=True)
@@ -173,8 +188,9 @@ class PitSpec:
         Pit depth (m).
     seed : int
         Seed of the cluster generator (>= 0).
-    aspect_w_to_s, tolerance, profile, pit_diameter_m, spread_s_m
-        As in :func:`make_pit_map`.
+    aspect_w_to_s, tolerance, profile, pit_diameter_m, spread_s_m, subpixel
+        As in :func:`make_pit_map` (``subpixel``: an ellipse's or rectangle's outline at sub-pixel resolution; the
+        pit of the ``tooth_pit`` effect is drawn so).
     """
 
     shape: str
@@ -187,6 +203,7 @@ class PitSpec:
     profile: str = "flat"
     pit_diameter_m: float | None = None
     spread_s_m: float | None = None
+    subpixel: bool = False
 
     def __post_init__(self):
         require(self.shape in SHAPES, "pits.shape", self.shape, f"one of: {', '.join(SHAPES)}")
@@ -199,6 +216,9 @@ class PitSpec:
                 self.severity, f"a number in [0, 1] or a list of {len(teeth)} such numbers (one per tooth)")
         _check_options(self.seed, self.depth_m, self.tolerance, self.aspect_w_to_s, self.profile,
                        self.pit_diameter_m, self.spread_s_m)
+        require(self.subpixel in (True, False), "pits.subpixel", self.subpixel, "true or false")
+        require(not (self.subpixel and self.shape == "cluster"), "pits.subpixel", self.subpixel,
+                "false for clusters (sub-pixel outlines are drawn for ellipses and rectangles)")
         object.__setattr__(self, "teeth", tuple(int(t) for t in teeth))
         object.__setattr__(self, "severity", tuple(float(v) for v in sev))
 
@@ -213,7 +233,8 @@ class PitSpec:
         Required keys: ``shape``, ``teeth``, ``severity`` (a fraction, one
         number or one per tooth). Optional: ``depth_mm`` (default 0.2, in [0.001, 5]),
         ``seed``, ``aspect_w_to_s``, ``tolerance``, ``profile``,
-        ``pit_diameter_mm``, ``spread_s_mm``. Unknown keys raise InputError.
+        ``pit_diameter_mm``, ``spread_s_mm``, ``subpixel`` (true: an ellipse's or rectangle's outline at
+        sub-pixel resolution). Unknown keys raise InputError.
 
         Example TOML::
 
@@ -241,4 +262,5 @@ class PitSpec:
         """The pit map this spec describes on ``grid`` (see :func:`make_pit_map`)."""
         return make_pit_map(grid, shape=self.shape, severity=self.severity_by_tooth, gear=gear, seed=self.seed,
                             depth_m=self.depth_m, tolerance=self.tolerance, aspect_w_to_s=self.aspect_w_to_s,
-                            profile=self.profile, pit_diameter_m=self.pit_diameter_m, spread_s_m=self.spread_s_m)
+                            profile=self.profile, pit_diameter_m=self.pit_diameter_m, spread_s_m=self.spread_s_m,
+                            subpixel=self.subpixel)

@@ -205,7 +205,7 @@ def _pitspec_dict(spec, gear, grid) -> dict:
     out = {"gear": gear, "grid": list(grid)}
     for key, (name, factor) in TOML_KEYS.items():
         v = getattr(spec, name)
-        if v is None:
+        if v is None or (key == "subpixel" and not v):      # the default left out: older cases' form unchanged
             continue
         out[key] = v / factor if factor else (list(v) if isinstance(v, tuple) else v)
     return out

@@ -18,30 +18,36 @@ a strip across almost the whole face), compared with the bare model (``Compariso
 candidate's fitted severity and 1-sigma, the true severity, and the pitted tooth's mesh-stiffness loss (its
 integral over the mesh cycles, proportional to the pitted area on a spur pair, and its largest value).
 
-Measured 2026-12-05 (HEAD 5d22ad4, seed 3; 29-106 s per case beside other work):
+Measured 2026-12-08 (stop 66: the tooth_pit effect's ellipse drawn with sub-pixel edges,
+datagen.pitshapes.subpixel_pit; seed 3; 33-68 s per case beside the slow suite). In brackets: 2026-12-05 (HEAD
+5d22ad4), the effect's ellipse in whole pixels.
 
-============  ============================  ==========================  ==============================
-true pit      claimed                       tooth_pit fit (+/- sigma)   stiffness loss: sum / largest
-============  ============================  ==========================  ==============================
-ellipse 0.10  tooth_pit                     0.083 +/- 0.003             1.07e10 / 8.4e7 N/m
-ellipse 0.20  tooth_pit                     0.192 +/- 0.005             2.13e10 / 1.22e8
-ellipse 0.30  tooth_pit                     0.333 +/- 0.008             3.20e10 / 1.52e8
-cluster 0.10  tooth_pit                     0.083 +/- 0.004             1.10e10 / 7.6e7
-cluster 0.20  tooth_pit                     0.165 +/- 0.007             2.17e10 / 1.25e8
-cluster 0.30  tooth_pit                     0.333 +/- 0.013             3.24e10 / 1.71e8
-strip 0.10    tooth_breakage, width 0.80    0.500 (its bound)           1.08e10 / 2.25e8
-strip 0.20    tooth_breakage, width 0.80    0.500 (its bound)           2.13e10 / 2.40e8
-rect. 0.30    tooth_pit                     0.262 +/- 0.005             3.18e10 / 1.33e8
-============  ============================  ==========================  ==============================
+============  ==========================================  ================================  ======================
+true pit      claimed                                     tooth_pit fit (+/- sigma), share  stiffness loss: sum /
+                                                                                            largest (N/m)
+============  ==========================================  ================================  ======================
+ellipse 0.10  tooth_pit                                   0.104 +/- 0.004, 96.4 % (0.083)   1.07e10 / 8.4e7
+ellipse 0.20  tooth_pit                                   0.188 +/- 0.004, 96.4 % (0.192)   2.13e10 / 1.22e8
+ellipse 0.30  tooth_pit                                   0.313 +/- 0.010, 95.6 % (0.333)   3.20e10 / 1.52e8
+cluster 0.10  tooth_breakage, width 0.27 (tooth_pit)      0.083 +/- 0.005, 90.6 % (0.083)   1.10e10 / 7.6e7
+cluster 0.20  tooth_pit                                   0.167 +/- 0.005, 94.0 % (0.165)   2.17e10 / 1.25e8
+cluster 0.30  tooth_breakage, width 0.63 (tooth_pit)      0.354 +/- 0.023, 86.9 % (0.333)   3.24e10 / 1.71e8
+strip 0.10    tooth_pit at its bound (tooth_breakage 0.8)  0.500 (its bound), 79.5 %         1.08e10 / 2.25e8
+strip 0.20    tooth_pit at its bound (tooth_breakage 0.8)  0.500 (its bound), 67.9 %         2.13e10 / 2.40e8
+rect. 0.30    tooth_pit                                   0.250 +/- 0.006, 96.1 % (0.262)   3.18e10 / 1.33e8
+============  ==========================================  ================================  ======================
 
-("strip": the rectangle of 0.1 and 0.2 in the flank's proportions is a band over 97 % of the face.) Even the
-right shape is read on the search's 1/12 ladder unless a finer point wins (0.083 for 0.1, 0.333 for 0.3), and the
-1-sigma, from the curvature of the error at the best point, is a statistical figure that leaves the shape out: the
-truth lies 3-6 sigma away. A pit's area does not set its vibration: the stiffness loss summed over the mesh is the
-pitted area's on a spur pair (the same for the three shapes at 0.2), its largest value is not (the strip takes
-the whole pair's width out of contact over 20 % of the profile, twice what the ellipse does), and a pair's
-transmission error grows with its compliance, so the strip is read as a broken tooth. The severity a comparison
-reports is the size of the effect's ellipse whose vibration is closest, to within the shape's own difference.
+("strip": the rectangle of 0.1 and 0.2 in the flank's proportions is a band over 97 % of the face.) The exact
+ellipses are now read off the search's 1/12 ladder where a finer point wins (0.104, 0.313; 0.083 and 0.333 with
+whole pixels). The two clusters claimed as a broken tooth are ties: on the 0.10 cluster the broken tooth lowers
+the error by 91.0 %, the pit by 90.6 % (whole-pixel ellipse: 91.5 %, which won); each is the other's rival
+(compare.candidates.rivals_of), and the report names both. The 1-sigma, from the curvature of the error at the
+best point, is a statistical figure that leaves the shape out: the truth lies 1-6 sigma away. A pit's area does
+not set its vibration: the stiffness loss summed over the mesh is the pitted area's on a spur pair (the same for
+the three shapes at 0.2), its largest value is not (the strip takes the whole pair's width out of contact over 20 %
+of the profile, twice what the ellipse does), and a pair's transmission error grows with its compliance. The
+severity a comparison reports is the size of the effect's ellipse whose vibration is closest, to within the
+shape's own difference.
 """
 from __future__ import annotations
 

@@ -34,13 +34,14 @@ def case(pair=PAIR, **kw):
 
 
 def test_the_effect_gives_the_record_of_the_same_pit_in_a_pits_table():
-    """Tooth 0 of the pinion, an ellipse of 20 % of the flank: the sensor channel of the case with the effect
-    equals that of the case with ``[pits]`` to the bit (spur, where the default slicing is resliced at the pit
-    map's columns, and helical); and the healthy case differs (the pit is there)."""
+    """Tooth 0 of the pinion, an ellipse of 20 % of the flank drawn with sub-pixel edges (``subpixel``, as the
+    effect draws it): the sensor channel of the case with the effect equals that of the case with ``[pits]`` to the
+    bit (spur, where the default slicing is resliced at the pit map's columns, and helical); and the healthy case
+    differs (the pit is there)."""
     for pair in (PAIR, preset("helical-dct")):
         # one case per call: cases batched together agree only to rounding (1e-12 of the peak)
         (a,), (b,), (c,) = (simulate([cs], channels=[CH]) for cs in (
-            case(pair, pits=PitSpec(shape="ellipse", teeth=(0,), severity=0.2)),
+            case(pair, pits=PitSpec(shape="ellipse", teeth=(0,), severity=0.2, subpixel=True)),
             case(pair, effects=({"name": "tooth_pit", "severity": 0.2},)), case(pair)))
         assert np.array_equal(a.channels[CH], b.channels[CH]), pair.name
         assert np.abs(a.channels[CH] - c.channels[CH]).max() > 0.05 * np.abs(c.channels[CH]).max()
@@ -66,14 +67,15 @@ def test_a_pit_added_to_a_pitted_case_merges_with_its_pits_and_keeps_its_grid():
     got = prepare(case(pits=spec, pit_grid=grid, stiffness=so, effects=({"name": "tooth_pit", "severity": 0.1},)))
     g = PAIR.flank_grid("pinion", *grid)
     both = spec.build(g, "pinion")
-    ell = PitSpec(shape="ellipse", teeth=(0,), severity=0.1).build(g, "pinion")
-    merged = replace(both, depth_m={**both.depth_m, 0: ell.depth_m[0]})
+    ell = PitSpec(shape="ellipse", teeth=(0,), severity=0.1, subpixel=True).build(g, "pinion")
+    merged = replace(both, depth_m={**both.depth_m, 0: ell.depth_m[0]}, coverage={0: ell.coverage[0]})
     ppc = got.record.positions_per_cycle
     want = mesh_stiffness(PAIR, pits=merged, positions_per_cycle=ppc, n_slices=64)
     assert np.array_equal(got.record.k, want.k_n_per_m[:got.record.k.size])
     wheel = prepare(case(pits=spec, pit_grid=grid, stiffness=so,
                          effects=({"name": "tooth_pit", "severity": 0.1, "gear": "wheel"},)))
-    wmap = PitSpec(shape="ellipse", teeth=(0,), severity=0.1).build(PAIR.flank_grid("wheel", *GRID), "wheel")
+    wmap = PitSpec(shape="ellipse", teeth=(0,), severity=0.1, subpixel=True).build(PAIR.flank_grid("wheel", *GRID),
+                                                                                   "wheel")
     want_w = mesh_stiffness(PAIR, pits=(both, wmap), positions_per_cycle=ppc, n_slices=64)
     assert wheel.record.period_cycles == 100
     assert np.array_equal(wheel.record.k, want_w.k_n_per_m[:wheel.record.k.size])

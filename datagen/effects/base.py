@@ -222,6 +222,11 @@ class Effect:
     #: sidebands, no other orders): a comparison that claims it warns that two models of one healthy pair differ
     #: there too (:mod:`compare.workflow`)
     mesh_harmonics_only: ClassVar[bool] = False
+    #: True when the fitted string option moves the signature to other lines (which gear carries a local tooth
+    #: fault: its shaft's orders), so that the comparison's first search round sweeps the first parameter at
+    #: every value of the option (:func:`compare.search.round_a`) instead of trying the others only at the
+    #: default's best point
+    fit_choice_grid: ClassVar[bool] = False
     #: the coarsest ``omega_max dt`` at which this effect's records are converged, for an effect whose records need
     #: a finer step than the default 0.3 (a law whose pairs lose contact); a case that leaves ``[solver] omega_dt``
     #: unset is stepped at the finest its effects ask for (:meth:`datagen.case_options.SolverOptions.step_for`)

@@ -78,6 +78,8 @@ class ToothBreakage(Effect):
                  "in its TSA")
     #: the comparison fits how much of the width is gone and on which gear (the tooth is a phase only)
     fit_parameters = (Fit("width_fraction", scale="linear", bounds=(0.0, 0.8)), "gear")
+    #: a broken pinion tooth and a broken wheel tooth put their lines at different shafts' orders
+    fit_choice_grid = True
     #: the hook builds the stiffness from the pair and its pits, so it runs before the other hook-1 effects
     rebuilds_stiffness = True
 

@@ -44,21 +44,24 @@ GRID = (64, 64)
 
 def with_pit(stiffness, gear: str, severity: float, depth_m: float):
     """``stiffness`` (a :class:`datagen.stiffness.MeshStiffness`) rebuilt with an elliptical pit of ``severity``
-    on tooth 0 of ``gear`` added to its pits, with its own options."""
+    on tooth 0 of ``gear`` added to its pits, with its own options; the ellipse's outline at sub-pixel resolution
+    (:func:`datagen.pitshapes.subpixel_pit`), so that the record moves continuously with the fitted severity."""
     from datagen.pits import make_pit_map
 
     def ellipse(grid):
-        new = make_pit_map(grid, shape="ellipse", severity=float(severity), teeth=[0], gear=gear, depth_m=depth_m)
-        return new.depth_m.get(0)
+        new = make_pit_map(grid, shape="ellipse", severity=float(severity), teeth=[0], gear=gear, depth_m=depth_m,
+                           subpixel=True)
+        return (new.depth_m[0], new.coverage[0]) if 0 in new.depth_m else None
 
     return with_tooth_fault(stiffness, gear, ellipse)
 
 
 def with_tooth_fault(stiffness, gear: str, tooth0_depth_m):
     """``stiffness`` rebuilt with a fault on tooth 0 of ``gear`` added to its pits, with its own options:
-    ``tooth0_depth_m(grid)`` gives the fault's depth map (m) on that gear's flank grid (None: no pixel). The
-    grid is the case's when it has a pit map on that gear, else :data:`GRID`; a fault on a tooth that already
-    has pits merges by the deeper of the two depths."""
+    ``tooth0_depth_m(grid)`` gives the fault's depth map (m) on that gear's flank grid (None: no pixel), or a
+    pair (depth map, pitted share of each pixel: :attr:`datagen.flank.PitMap.coverage`). The grid is the case's
+    when it has a pit map on that gear, else :data:`GRID`; a fault on a tooth that already has pits merges by the
+    deeper of the two depths and the larger of the two shares."""
     from datagen.stiffness import default_n_slices, mesh_stiffness
 
     pair = stiffness.pair
@@ -67,9 +70,16 @@ def with_tooth_fault(stiffness, gear: str, tooth0_depth_m):
     grid = old.grid if old is not None else pair.flank_grid(gear, *GRID)
     new = tooth0_depth_m(grid)
     depth = dict(old.depth_m) if old is not None else {}
+    coverage = dict(old.coverage) if old is not None else {}
+    if isinstance(new, tuple):
+        new, share = (np.asarray(a, dtype=np.float64) for a in new)
+        old_share = old.share(0) if old is not None and 0 in depth else np.zeros(grid.shape)
+        coverage[0] = np.maximum(old_share, share)
+    elif new is not None and 0 in coverage:       # a whole-pixel fault over a tooth with sub-pixel edges
+        coverage[0] = np.maximum(coverage[0], (np.asarray(new) > 0).astype(np.float64))
     if new is not None:
         depth[0] = np.maximum(depth[0], new) if 0 in depth else np.asarray(new, dtype=np.float64)
-    maps[gear] = PitMap(grid=grid, depth_m=depth, gear=gear)
+    maps[gear] = PitMap(grid=grid, depth_m=depth, gear=gear, coverage=coverage)
     # slices as a [pits] table gets them: a record without pits at the default slicing (1 for a spur pair, 100
     # for a helical one) is resliced at the pit maps' face columns (a spur pit on one slice would take the whole
     # face out of contact); a record that has pits, or other slices, keeps its own
@@ -99,6 +109,8 @@ class ToothPit(Effect):
                  "around every mesh harmonic, envelope lines at its orders, one impulsive tooth in its TSA")
     #: the comparison fits the size and the gear (the tooth sets only a phase, the depth nothing under no_contact)
     fit_parameters = (Fit("severity", scale="linear", bounds=(0.0, 0.5)), "gear")
+    #: a pinion pit and a wheel pit put their lines at different shafts' orders: each gear gets its own first round
+    fit_choice_grid = True
     #: the hook builds the stiffness from the pair and its pits, so it runs before the other hook-1 effects
     rebuilds_stiffness = True
 
