@@ -210,9 +210,7 @@ class PitMap:
     def severity(self, tooth: int) -> float:
         """Pitted area / active flank area of one tooth (pits outside the contact band do not count; a partly
         pitted pixel counts by its share)."""
-        if tooth not in self.coverage:
-            return float(self.grid.severity_of(self.mask(tooth)))
-        return float(self.coverage[tooth][:, self.grid.active_cols].sum() / self.grid.n_active_pixels)
+        return float(self.share(tooth)[:, self.grid.active_cols].sum() / self.grid.n_active_pixels)
 
     def severities(self) -> dict[int, float]:
         return {t: self.severity(t) for t in self.pitted_teeth}

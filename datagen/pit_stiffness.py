@@ -92,8 +92,8 @@ class _PitGeometry:
 def _section_loss(pair, beam: ToothBeam, which: str, depth: np.ndarray, grid, share: np.ndarray | None = None
                   ) -> _PitGeometry:
     """Cumulative W_n, A_0 increments that the pits of one tooth cause, row by row from the SAP up. ``share``:
-    the pitted share of each pixel (default: 1 where the depth is > 0); a partly pitted pixel removes that share
-    of its depth's material (its depth times its share, as a thinner section)."""
+    the pitted share of each pixel (:meth:`datagen.flank.PitMap.share`; default: whole pixels where the depth is
+    > 0); a partly pitted pixel removes that share of its depth's material (its depth times its share)."""
     if share is None:
         share = (depth > 0).astype(np.float64)
     depth = depth * share

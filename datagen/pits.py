@@ -105,9 +105,7 @@ def make_pit_map(grid: FlankGrid, *, shape: str, severity: float | Mapping[int, 
                                                                             f"largest {shape} that fits this flank")
     for tooth, sev in per_tooth.items():
         require(0.0 <= sev <= hi, f"pits.severity[tooth {tooth}]", sev, f"a number in [0, {hi:.4f}] ({why})")
-    require(subpixel in (True, False), "pits.subpixel", subpixel, "true or false")
-    require(not (subpixel and shape == "cluster"), "pits.subpixel", subpixel,
-            "false for clusters (sub-pixel outlines are drawn for ellipses and rectangles)")
+    _check_subpixel(shape, subpixel)
     depth, coverage = {}, {}
     for tooth, sev in per_tooth.items():
         if subpixel:
@@ -123,6 +121,12 @@ def make_pit_map(grid: FlankGrid, *, shape: str, severity: float | Mapping[int, 
             depth[tooth] = sized_pit(grid, shape=shape, severity=sev, depth_m=depth_m,
                                      aspect_w_to_s=aspect_w_to_s, profile=profile, tolerance=tol)
     return PitMap(grid=grid, depth_m=depth, gear=gear, coverage=coverage)
+
+
+def _check_subpixel(shape: str, subpixel) -> None:
+    require(subpixel in (True, False), "pits.subpixel", subpixel, "true or false")
+    require(not (subpixel and shape == "cluster"), "pits.subpixel", subpixel,
+            "false for clusters (sub-pixel outlines are drawn for ellipses and rectangles)")
 
 
 def _check_options(seed, depth_m, tolerance, aspect_w_to_s, profile, pit_diameter_m, spread_s_m) -> None:
@@ -216,9 +220,7 @@ class PitSpec:
                 self.severity, f"a number in [0, 1] or a list of {len(teeth)} such numbers (one per tooth)")
         _check_options(self.seed, self.depth_m, self.tolerance, self.aspect_w_to_s, self.profile,
                        self.pit_diameter_m, self.spread_s_m)
-        require(self.subpixel in (True, False), "pits.subpixel", self.subpixel, "true or false")
-        require(not (self.subpixel and self.shape == "cluster"), "pits.subpixel", self.subpixel,
-                "false for clusters (sub-pixel outlines are drawn for ellipses and rectangles)")
+        _check_subpixel(self.shape, self.subpixel)
         object.__setattr__(self, "teeth", tuple(int(t) for t in teeth))
         object.__setattr__(self, "severity", tuple(float(v) for v in sev))
 
